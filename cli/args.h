@@ -1,0 +1,50 @@
+// A small declarative argument parser: each option names its target and range, --help is
+// generated, and every error names the option at fault.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+
+//! A command-line mistake; the CLI exits with status 2.
+class UsageError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
+class ArgParser {
+ public:
+  ArgParser(std::string command, std::string summary);
+
+  void positional(const std::string& name, const std::string& help, std::string* out);
+  void option(const std::string& name, const std::string& metavar, const std::string& help, std::string* out);
+  void option(const std::string& name, const std::string& metavar, const std::string& help, int* out, int lo, int hi);
+  void option(const std::string& name, const std::string& metavar, const std::string& help, uint64_t* out);
+  void option(const std::string& name, const std::string& metavar, const std::string& help, double* out, double lo, double hi);
+  //! A short alias such as -o for an option already declared.
+  void alias(const std::string& short_name, const std::string& long_name);
+
+  //! Parses argv[first..argc). Returns false when --help was asked for (and printed).
+  //! \throw UsageError naming the option for unknown options, missing or bad values
+  bool parse(int argc, char** argv, int first);
+  std::string help() const;
+
+ private:
+  struct Spec {
+    std::string name, metavar, help;
+    std::function<void(const std::string&)> set;
+  };
+  const Spec* find(const std::string& name) const;
+  std::string command_, summary_;
+  std::vector<Spec> options_;
+  std::vector<std::pair<std::string, std::string>> aliases_;
+  std::vector<std::pair<std::string, std::string*>> positionals_;
+  std::vector<std::string> positional_help_;
+};
+
+}  // namespace prtsub

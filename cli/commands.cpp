@@ -1,0 +1,350 @@
+// Command wiring: each command fills a settings struct from its options and runs the
+// pipeline stages in order (mesh -> transfer -> asset), timing each stage for the summary
+// and the JSON report.
+#include "cli/commands.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include "cli/args.h"
+#include "cli/progress.h"
+#include "cli/report.h"
+#include "prt/asset.h"
+#include "prt/ray_scene.h"
+#include "prt/sh.h"
+#include "prt/transfer.h"
+#include "subdiv/mesh_io.h"
+
+namespace prtsub {
+namespace {
+
+constexpr const char* kVersion = "0.1.0";
+
+class Stopwatch {
+ public:
+  double lap() {
+    auto now = std::chrono::steady_clock::now();
+    double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+  double total() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_ = start_;
+};
+
+// Fails before any work when the output cannot be created, so a long bake never ends in an
+// unwritable path. Leaves nothing behind.
+void check_writable(const std::string& path) {
+  const std::string probe = path + ".tmp.probe." + std::to_string(::getpid());
+  std::ofstream f(probe);
+  if (!f) throw IoError(path + ": cannot create output file (" + std::strerror(errno) + ")");
+  f.close();
+  std::remove(probe.c_str());
+}
+
+void add_defects(Report& r, const MeshDefects& d) {
+  r.set("defects_degenerate_faces", static_cast<uint64_t>(d.degenerate_faces));
+  r.set("defects_zero_area_faces", static_cast<uint64_t>(d.zero_area_faces));
+  r.set("defects_duplicate_faces", static_cast<uint64_t>(d.duplicate_faces));
+  r.set("defects_unreferenced_vertices", static_cast<uint64_t>(d.unreferenced_vertices));
+  r.set("defects_winding_conflicts", static_cast<uint64_t>(d.winding_conflicts));
+  r.set("defects_non_manifold_edges", static_cast<uint64_t>(d.non_manifold_edges));
+  r.set("defects_invalid_file_normals", static_cast<uint64_t>(d.invalid_file_normals));
+  r.set("welded_vertices", static_cast<uint64_t>(d.welded_vertices));
+  r.set("boundary_edges", static_cast<uint64_t>(d.boundary_edges));
+  r.set("polygons_triangulated", static_cast<uint64_t>(d.polygons_triangulated));
+}
+
+void print_defects(const MeshDefects& d) {
+  std::printf("  tolerated:  %zu degenerate faces dropped, %zu zero-area faces, %zu duplicate faces,\n"
+              "              %zu unreferenced vertices dropped, %zu winding conflicts, %zu non-manifold edges,\n"
+              "              %zu invalid file normals\n",
+              d.degenerate_faces, d.zero_area_faces, d.duplicate_faces, d.unreferenced_vertices,
+              d.winding_conflicts, d.non_manifold_edges, d.invalid_file_normals);
+  std::printf("  topology:   %zu boundary edges, %zu vertices welded, %zu polygons triangulated\n",
+              d.boundary_edges, d.welded_vertices, d.polygons_triangulated);
+}
+
+// Render-vertex positions, the points transfer is computed at.
+RowMatrixX3d vertex_points(const Mesh& mesh) {
+  RowMatrixX3d p(static_cast<Eigen::Index>(mesh.num_vertices()), 3);
+  for (size_t v = 0; v < mesh.num_vertices(); ++v) p.row(static_cast<Eigen::Index>(v)) = mesh.positions.row(mesh.vertex_position[v]);
+  return p;
+}
+
+struct CommonOptions {
+  std::string input;
+  std::string report;
+  TransferOptions transfer;
+  double crease_angle = 60.0;
+};
+
+void add_common(ArgParser& args, CommonOptions& c) {
+  args.positional("INPUT", "mesh file: .obj, .ply (ASCII or binary), .off or .stl", &c.input);
+  args.option("--order", "N", "SH order: N bands, N² coefficients", &c.transfer.order, 1, kMaxShOrder);
+  args.option("--rays", "R", "rays per vertex", &c.transfer.rays, 1, 1 << 20);
+  args.option("--seed", "S", "random seed; results depend on it, not on threads", &c.transfer.seed);
+  args.option("--threads", "T", "worker threads, 0 for every core", &c.transfer.threads, 0, 1024);
+  args.option("--crease-angle", "DEG", "computed normals: sharper edges are creases; 0 is flat shading", &c.crease_angle, 0.0, 180.0);
+  args.option("--report", "R.json", "also write a flat JSON report", &c.report);
+}
+
+int cmd_bake(int argc, char** argv) {
+  CommonOptions c;
+  std::string output;
+  ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset (binary PLY).");
+  add_common(args, c);
+  args.option("--output", "ASSET.ply", "output asset (required)", &output);
+  args.alias("-o", "--output");
+  if (!args.parse(argc, argv, 2)) return 0;
+  if (output.empty()) throw UsageError("bake: missing -o ASSET.ply");
+  check_transfer_options(c.transfer);
+  check_writable(output);
+  if (!c.report.empty()) check_writable(c.report);
+
+  Stopwatch clock;
+  Mesh mesh = load_mesh(c.input, LoadOptions{c.crease_angle});
+  const double t_load = clock.lap();
+  RayScene scene(mesh.positions, position_triangles(mesh));
+  const double t_scene = clock.lap();
+
+  Progress progress("transfer", mesh.num_vertices(), stderr_is_terminal());
+  TransferStats stats;
+  RowMatrixXd transfer = shadowed_transfer(scene, vertex_points(mesh), mesh.normals, c.transfer, &stats,
+                                           [&](size_t n) { progress.add(n); });
+  progress.finish();
+  const double t_transfer = clock.lap();
+
+  Metadata meta = sh_convention_metadata(c.transfer.order);
+  meta.push_back({"source", c.input});
+  meta.push_back({"rays", std::to_string(c.transfer.rays)});
+  meta.push_back({"seed", std::to_string(c.transfer.seed)});
+  meta.push_back({"crease_angle", std::to_string(c.crease_angle)});
+  meta.push_back({"normals", mesh.normals_from_file ? "file" : "computed"});
+  meta.push_back({"estimator", "cosine-lattice cross-fitted-control-variate"});
+  meta.push_back({"generator", std::string("prtsub ") + kVersion});
+  write_asset(output, mesh, transfer, meta);
+  const double t_write = clock.lap();
+  const double total = clock.total();
+  const double rays_per_second = static_cast<double>(stats.rays) / std::max(stats.seconds, 1e-9);
+
+  Report r;
+  r.set("command", "bake");
+  r.set("input", c.input);
+  r.set("output", output);
+  r.set("order", c.transfer.order);
+  r.set("rays_per_vertex", c.transfer.rays);
+  r.set("seed", c.transfer.seed);
+  r.set("crease_angle", c.crease_angle);
+  r.set("triangles_in", static_cast<uint64_t>(mesh.input_triangles));
+  r.set("vertices_in", static_cast<uint64_t>(mesh.input_vertices));
+  r.set("triangles_out", static_cast<uint64_t>(mesh.num_faces()));
+  r.set("vertices_out", static_cast<uint64_t>(mesh.num_vertices()));
+  r.set("positions_out", static_cast<uint64_t>(mesh.positions.rows()));
+  r.set("normals_from_file", mesh.normals_from_file);
+  r.set("rays", stats.rays);
+  r.set("rays_per_second", rays_per_second);
+  r.set("seconds_total", total);
+  r.set("seconds_load", t_load);
+  r.set("seconds_scene", t_scene);
+  r.set("seconds_transfer", t_transfer);
+  r.set("seconds_write", t_write);
+  r.set("peak_memory_mib", peak_memory_mib());
+  add_defects(r, mesh.defects);
+
+  std::printf("prtsub bake: %s -> %s\n", c.input.c_str(), output.c_str());
+  std::printf("  input:      %zu triangles, %zu vertices\n", mesh.input_triangles, mesh.input_vertices);
+  std::printf("  output:     %zu triangles, %zu vertices (%lld positions; normals %s)\n", mesh.num_faces(),
+              mesh.num_vertices(), static_cast<long long>(mesh.positions.rows()),
+              mesh.normals_from_file ? "from file" : "computed");
+  print_defects(mesh.defects);
+  std::printf("  transfer:   order %d (%d coefficients), %d rays per vertex, seed %llu\n", c.transfer.order,
+              sh_count(c.transfer.order), c.transfer.rays, static_cast<unsigned long long>(c.transfer.seed));
+  std::printf("  rays:       %llu in %.3f s (%.2f Mrays/s)\n", static_cast<unsigned long long>(stats.rays),
+              stats.seconds, rays_per_second / 1e6);
+  std::printf("  time:       %.3f s total (load %.3f, scene %.3f, transfer %.3f, write %.3f); peak memory %.0f MiB\n",
+              total, t_load, t_scene, t_transfer, t_write, peak_memory_mib());
+  if (!c.report.empty()) r.write(c.report);
+  return 0;
+}
+
+int cmd_inspect(int argc, char** argv) {
+  std::string input, report;
+  ArgParser args("inspect", "Prints what a PRT asset holds, checks it, and shows the transfer's energy per SH band.");
+  args.positional("ASSET", "a .ply asset written by prtsub bake", &input);
+  args.option("--report", "R.json", "also write a flat JSON report", &report);
+  if (!args.parse(argc, argv, 2)) return 0;
+  if (!report.empty()) check_writable(report);
+
+  Asset a = read_asset(input);  // throws on NaN/Inf, bad sizes or indices
+  const Eigen::Index V = a.transfer.rows();
+  size_t bad_normals = 0;
+  for (Eigen::Index i = 0; i < V; ++i)
+    if (std::abs(a.normals.row(i).norm() - 1.0) > 1e-3) ++bad_normals;
+  std::vector<double> band(static_cast<size_t>(a.order), 0.0);
+  double total = 0;
+  for (int l = 0; l < a.order; ++l) {
+    for (int m = -l; m <= l; ++m) band[static_cast<size_t>(l)] += a.transfer.col(sh_index(l, m)).squaredNorm();
+    total += band[static_cast<size_t>(l)];
+  }
+  int order99 = a.order;
+  double cumulative = 0;
+  for (int l = 0; l < a.order; ++l) {
+    cumulative += band[static_cast<size_t>(l)];
+    if (total > 0 && cumulative >= 0.99 * total) {
+      order99 = l + 1;
+      break;
+    }
+  }
+  std::map<std::string, std::string> meta(a.metadata.begin(), a.metadata.end());
+  std::printf("prtsub inspect: %s\n", input.c_str());
+  std::printf("  vertices:   %lld\n  triangles:  %zu\n  sh order:   %d (%d coefficients per vertex)\n",
+              static_cast<long long>(V), a.triangles.size(), a.order, sh_count(a.order));
+  for (const auto& [k, v] : a.metadata) std::printf("  meta:       %s %s\n", k.c_str(), v.c_str());
+  std::printf("  checks:     finite values, indices in range, %zu of %lld normals not unit length\n", bad_normals,
+              static_cast<long long>(V));
+  std::printf("  energy by band (sum over vertices of squared coefficients):\n");
+  cumulative = 0;
+  for (int l = 0; l < a.order; ++l) {
+    cumulative += band[static_cast<size_t>(l)];
+    std::printf("    l=%d  %6.3f%%  cumulative %7.3f%%\n", l, total > 0 ? 100 * band[static_cast<size_t>(l)] / total : 0.0,
+                total > 0 ? 100 * cumulative / total : 0.0);
+  }
+  std::printf("  order holding 99%% of the energy: %d%s\n", order99,
+              order99 < a.order ? " (a lower --order would do for this scene)" : "");
+  if (meta.count("sh_order") && meta["sh_order"] != std::to_string(a.order))
+    std::printf("  warning:    sh_order comment says %s\n", meta["sh_order"].c_str());
+
+  if (!report.empty()) {
+    Report r;
+    r.set("command", "inspect");
+    r.set("input", input);
+    r.set("vertices", static_cast<int64_t>(V));
+    r.set("triangles", static_cast<uint64_t>(a.triangles.size()));
+    r.set("order", a.order);
+    r.set("order_99_percent_energy", order99);
+    r.set("normals_not_unit", static_cast<uint64_t>(bad_normals));
+    for (int l = 0; l < a.order; ++l)
+      r.set("energy_fraction_band_" + std::to_string(l), total > 0 ? band[static_cast<size_t>(l)] / total : 0.0);
+    r.write(report);
+  }
+  return bad_normals ? 1 : 0;
+}
+
+int cmd_bench(int argc, char** argv) {
+  CommonOptions c;
+  int repeat = 2;
+  ArgParser args("bench",
+                 "Times the bake's transfer stage against a bare Embree occlusion loop casting the same rays\n"
+                 "from the same points with the same threads, alternating runs; the best run of each counts.");
+  add_common(args, c);
+  args.option("--repeat", "N", "runs of each, alternated", &repeat, 1, 100);
+  if (!args.parse(argc, argv, 2)) return 0;
+  check_transfer_options(c.transfer);
+  if (!c.report.empty()) check_writable(c.report);
+
+  Stopwatch clock;
+  Mesh mesh = load_mesh(c.input, LoadOptions{c.crease_angle});
+  const double t_load = clock.lap();
+  RayScene scene(mesh.positions, position_triangles(mesh));
+  const double t_scene = clock.lap();
+  RowMatrixX3d points = vertex_points(mesh);
+
+  double best_transfer = INFINITY, best_bare = INFINITY;
+  uint64_t rays = 0, occluded = 0;
+  std::printf("prtsub bench: %s, %zu vertices, order %d, %d rays per vertex\n", c.input.c_str(), mesh.num_vertices(),
+              c.transfer.order, c.transfer.rays);
+  for (int i = 0; i < repeat; ++i) {
+    TransferStats bare, full;
+    occluded = bare_occlusion_loop(scene, points, mesh.normals, c.transfer, &bare);
+    shadowed_transfer(scene, points, mesh.normals, c.transfer, &full);
+    rays = full.rays;
+    best_bare = std::min(best_bare, bare.seconds);
+    best_transfer = std::min(best_transfer, full.seconds);
+    std::printf("  run %d: bare %.3f s, transfer %.3f s\n", i + 1, bare.seconds, full.seconds);
+  }
+  const double bare_rps = static_cast<double>(rays) / best_bare, transfer_rps = static_cast<double>(rays) / best_transfer;
+  std::printf("  bare loop:  %.2f Mrays/s\n  transfer:   %.2f Mrays/s (%.1f%% of bare)\n", bare_rps / 1e6, transfer_rps / 1e6,
+              100 * transfer_rps / bare_rps);
+  std::printf("  occluded:   %.1f%% of rays; scene build %.3f s; peak memory %.0f MiB\n",
+              100.0 * static_cast<double>(occluded) / static_cast<double>(rays), t_scene, peak_memory_mib());
+  if (!c.report.empty()) {
+    Report r;
+    r.set("command", "bench");
+    r.set("input", c.input);
+    r.set("order", c.transfer.order);
+    r.set("rays_per_vertex", c.transfer.rays);
+    r.set("threads", c.transfer.threads);
+    r.set("vertices", static_cast<uint64_t>(mesh.num_vertices()));
+    r.set("triangles", static_cast<uint64_t>(mesh.num_faces()));
+    r.set("rays", rays);
+    r.set("repeat", repeat);
+    r.set("occluded_fraction", static_cast<double>(occluded) / static_cast<double>(rays));
+    r.set("transfer_rays_per_second", transfer_rps);
+    r.set("bare_rays_per_second", bare_rps);
+    r.set("transfer_over_bare", transfer_rps / bare_rps);
+    r.set("seconds_load", t_load);
+    r.set("seconds_scene", t_scene);
+    r.set("seconds_transfer_best", best_transfer);
+    r.set("seconds_bare_best", best_bare);
+    r.set("peak_memory_mib", peak_memory_mib());
+    r.write(c.report);
+  }
+  return 0;
+}
+
+const char* kUsage =
+    "usage: prtsub COMMAND [options]\n"
+    "\n"
+    "Prepares meshes for diffuse precomputed radiance transfer (PRT).\n"
+    "\n"
+    "commands:\n"
+    "  bake      compute per-vertex shadowed SH transfer and write a PRT asset\n"
+    "  inspect   print and check what an asset holds, with its energy per SH band\n"
+    "  bench     time the transfer stage against a bare Embree occlusion loop\n"
+    "\n"
+    "prtsub COMMAND --help shows a command's options. Docs: docs/ in the source tree.\n";
+
+}  // namespace
+
+int run_cli(int argc, char** argv) {
+  try {
+    if (argc < 2) {
+      std::fputs(kUsage, stderr);
+      return 2;
+    }
+    const std::string command = argv[1];
+    if (command == "--help" || command == "-h" || command == "help") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (command == "--version") {
+      std::printf("prtsub %s\n", kVersion);
+      return 0;
+    }
+    if (command == "bake") return cmd_bake(argc, argv);
+    if (command == "inspect") return cmd_inspect(argc, argv);
+    if (command == "bench") return cmd_bench(argc, argv);
+    throw UsageError("unknown command '" + command + "' (try prtsub --help)");
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "prtsub: error: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "prtsub: error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "prtsub: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace prtsub

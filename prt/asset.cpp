@@ -1,0 +1,169 @@
+#include "prt/asset.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+#include "prt/sh.h"
+#include "subdiv/exceptions.h"
+#include "subdiv/ply.h"
+
+namespace prtsub {
+namespace {
+
+template <class T>
+void put(std::string& out, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));  // x86 and ARM hosts are little-endian; checked in write_asset
+  out.append(b, sizeof(T));
+}
+
+bool host_is_little_endian() {
+  const uint16_t one = 1;
+  unsigned char b;
+  std::memcpy(&b, &one, 1);
+  return b == 1;
+}
+
+}  // namespace
+
+Metadata sh_convention_metadata(int order) {
+  return {
+      {"prtsub_asset", "1"},
+      {"sh_basis", "real-orthonormal index=l*(l+1)+m no-condon-shortley y1-1=+c*y y10=+c*z y11=+c*x axes=mesh"},
+      {"sh_order", std::to_string(order)},
+      {"transfer", "t_i=integral(V*max(n.w,0)*y_i) radiance=albedo/pi*sum(l_i*t_i)"},
+  };
+}
+
+void write_file_atomically(const std::string& path, const std::string& bytes) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError(path + ": cannot create output file (" + std::strerror(errno) + ")");
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw IoError(path + ": write failed (disk full?)");
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    int err = errno;
+    std::remove(tmp.c_str());
+    throw IoError(path + ": cannot move output into place (" + std::strerror(err) + ")");
+  }
+}
+
+void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
+                 const Metadata& metadata) {
+  if (!host_is_little_endian()) throw IoError(path + ": big-endian hosts are not supported");
+  const size_t V = mesh.num_vertices(), F = mesh.num_faces();
+  const Eigen::Index K = transfer.cols();
+  if (static_cast<size_t>(transfer.rows()) != V)
+    throw InputError(path + ": transfer has " + std::to_string(transfer.rows()) + " rows for " + std::to_string(V) + " vertices");
+  if (!transfer.allFinite()) throw InputError(path + ": refusing to write non-finite transfer values");
+  for (size_t v = 0; v < V; ++v) {
+    for (int c = 0; c < 3; ++c) {
+      double p = mesh.positions(mesh.vertex_position[v], c);
+      if (!std::isfinite(static_cast<float>(p)))
+        throw InputError(path + ": position does not fit in float (vertex " + std::to_string(v) + ")");
+    }
+    for (Eigen::Index c = 0; c < K; ++c)
+      if (!std::isfinite(static_cast<float>(transfer(static_cast<Eigen::Index>(v), c))))
+        throw InputError(path + ": transfer value does not fit in float (vertex " + std::to_string(v) + ")");
+  }
+
+  std::string out;
+  out.reserve(512 + V * (6 + static_cast<size_t>(K)) * 4 + F * 17);
+  out += "ply\nformat binary_little_endian 1.0\n";
+  for (const auto& [key, value] : metadata) {
+    std::string line = key + " " + value;
+    for (char& ch : line)
+      if (ch == '\n' || ch == '\r') ch = ' ';
+    out += "comment " + line + "\n";
+  }
+  out += "element vertex " + std::to_string(V) + "\n";
+  for (const char* p : {"x", "y", "z", "nx", "ny", "nz"}) out += std::string("property float ") + p + "\n";
+  for (Eigen::Index c = 0; c < K; ++c) out += "property float t" + std::to_string(c) + "\n";
+  out += "element face " + std::to_string(F) + "\n";
+  out += "property list uchar int vertex_indices\nproperty int source_face\nend_header\n";
+  for (size_t v = 0; v < V; ++v) {
+    const auto vi = static_cast<Eigen::Index>(v);
+    for (int c = 0; c < 3; ++c) put(out, static_cast<float>(mesh.positions(mesh.vertex_position[v], c)));
+    for (int c = 0; c < 3; ++c) put(out, static_cast<float>(mesh.normals(vi, c)));
+    for (Eigen::Index c = 0; c < K; ++c) put(out, static_cast<float>(transfer(vi, c)));
+  }
+  for (size_t f = 0; f < F; ++f) {
+    put<uint8_t>(out, 3);
+    for (int k = 0; k < 3; ++k) put<int32_t>(out, static_cast<int32_t>(mesh.triangles[f][k]));
+    put<int32_t>(out, static_cast<int32_t>(mesh.source_face[f]));
+  }
+  write_file_atomically(path, out);
+}
+
+Asset read_asset(const std::string& path) {
+  PlyFile ply = read_ply(path);
+  const PlyElement* v = ply.element("vertex");
+  const PlyElement* f = ply.element("face");
+  if (!v || !f) throw InputError(path + ": not a prtsub asset (needs vertex and face elements)");
+  Asset a;
+  for (const std::string& c : ply.comments) {
+    size_t sp = c.find(' ');
+    a.metadata.emplace_back(c.substr(0, sp), sp == std::string::npos ? "" : c.substr(sp + 1));
+  }
+  const Eigen::Index V = static_cast<Eigen::Index>(v->count);
+  auto column = [&](const char* name) -> const std::vector<double>& {
+    const std::vector<double>* col = v->scalar(name);
+    if (!col) throw InputError(path + ": asset vertex element lacks property '" + name + "'");
+    return *col;
+  };
+  a.positions.resize(V, 3);
+  a.normals.resize(V, 3);
+  const char* names[6] = {"x", "y", "z", "nx", "ny", "nz"};
+  for (int c = 0; c < 6; ++c) {
+    const auto& col = column(names[c]);
+    for (Eigen::Index i = 0; i < V; ++i) (c < 3 ? a.positions(i, c) : a.normals(i, c - 3)) = col[static_cast<size_t>(i)];
+  }
+  int K = 0;
+  while (v->scalar("t" + std::to_string(K))) ++K;
+  int order = static_cast<int>(std::lround(std::sqrt(K)));
+  if (K == 0 || order * order != K || order > kMaxShOrder)
+    throw InputError(path + ": asset has " + std::to_string(K) + " transfer coefficients; expected N² for an order N of 1 to 10");
+  a.order = order;
+  a.transfer.resize(V, K);
+  for (int c = 0; c < K; ++c) {
+    const auto& col = *v->scalar("t" + std::to_string(c));
+    for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, c) = col[static_cast<size_t>(i)];
+  }
+  for (Eigen::Index i = 0; i < V; ++i) {
+    if (!a.positions.row(i).allFinite() || !a.normals.row(i).allFinite() || !a.transfer.row(i).allFinite())
+      throw InputError(path + ": vertex " + std::to_string(i) + " holds NaN or Inf");
+  }
+  int li = f->list("vertex_indices");
+  if (li < 0) throw InputError(path + ": asset face element lacks vertex_indices");
+  const auto& offs = f->list_offsets[static_cast<size_t>(li)];
+  const auto& vals = f->list_values[static_cast<size_t>(li)];
+  const std::vector<double>* src = f->scalar("source_face");
+  if (!src) throw InputError(path + ": asset face element lacks source_face");
+  a.triangles.resize(f->count);
+  a.source_face.resize(f->count);
+  for (size_t i = 0; i < f->count; ++i) {
+    if (offs[i + 1] - offs[i] != 3) throw InputError(path + ": face " + std::to_string(i) + " is not a triangle");
+    for (int k = 0; k < 3; ++k) {
+      double idx = vals[offs[i] + static_cast<size_t>(k)];
+      if (!(idx >= 0 && idx < static_cast<double>(V)))
+        throw InputError(path + ": face " + std::to_string(i) + " refers to vertex " + std::to_string(static_cast<long long>(idx)) +
+                         " of " + std::to_string(V));
+      a.triangles[i][static_cast<size_t>(k)] = static_cast<uint32_t>(idx);
+    }
+    if (!((*src)[i] >= 0)) throw InputError(path + ": face " + std::to_string(i) + " has a negative source_face");
+    a.source_face[i] = static_cast<uint32_t>((*src)[i]);
+  }
+  return a;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,166 @@
+// Shadowed transfer with a cross-fitted control variate.
+//
+// For a point p with normal n, cosine-weighted directions ω_k (pdf cos/π) give the plain
+// estimate (π/R) Σ V_k y(ω_k). The closed-form unshadowed transfer t_u(n) = ∫ cos⁺ y is a
+// control variate: for any β independent of the samples it averages over,
+//     t̂ = β t_u + (π/R) Σ (V_k − β) y(ω_k)
+// is unbiased. β = 1 estimates only the blocked part (exact when nothing is blocked); β = 0
+// estimates only the visible part (exact when everything is). We split the R rays into two
+// interleaved halves of the lattice and give each half the β chosen from the *other* half's
+// visible fraction (1 if at least half visible, else 0). The choice is independent of the
+// half it weights, so t̂ stays unbiased; an unoccluded point is exact at any ray count, a
+// fully enclosed one is exactly zero, and SH are evaluated only for rays with V_k ≠ β —
+// the minority — which keeps the stage close to a bare occlusion loop.
+//
+// Directions come from a Fibonacci lattice (low discrepancy for any R), shifted per point by
+// a hash of (seed, point index): decorrelated between points and identical for any thread
+// count. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
+// 20-45% faster than single rays.
+#include "prt/transfer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "prt/sampling.h"
+#include "prt/sh.h"
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+constexpr size_t kGrain = 16;  // points per task: small enough to balance, large enough to amortise
+
+struct PointRays {
+  std::vector<RTCRay> rays;
+  std::vector<Eigen::Vector3d> directions;  // world, double: used for SH
+};
+
+// Fills the R rays of point i and traces them; afterwards rays[k].tfar == -inf if occluded.
+void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
+                 Eigen::Index i, const TransferOptions& opt, PointRays& buf) {
+  const uint32_t R = static_cast<uint32_t>(opt.rays);
+  buf.rays.resize(R);
+  buf.directions.resize(R);
+  Eigen::Vector3d n = normals.row(i).transpose(), t, b;
+  tangent_frame(n, t, b);
+  Eigen::Vector3f local = scene.to_local(points.row(i).transpose());
+  Eigen::Vector3f origin = local + scene.ray_offset(local) * n.cast<float>();
+  Rng rng(opt.seed, static_cast<uint64_t>(i));
+  const double su = rng.uniform(), sv = rng.uniform();
+  for (uint32_t k = 0; k < R; ++k) {
+    Eigen::Vector3d d = lattice_cosine_direction(k, R, su, sv);
+    Eigen::Vector3d w = (d.x() * t + d.y() * b + d.z() * n).normalized();
+    buf.directions[k] = w;
+    init_occlusion_ray(buf.rays[k], origin, w.cast<float>());
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded1M(scene.handle(), &context, buf.rays.data(), R, sizeof(RTCRay));
+}
+
+inline bool occluded(const RTCRay& r) { return r.tfar == -std::numeric_limits<float>::infinity(); }
+
+template <class Body>
+void parallel_points(Eigen::Index count, int threads, Body&& body) {
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, count, kGrain), body);
+  });
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void check_transfer_options(const TransferOptions& o) {
+  if (o.order < 1 || o.order > kMaxShOrder)
+    throw InputError("--order must be between 1 and " + std::to_string(kMaxShOrder) + ", got " + std::to_string(o.order));
+  if (o.rays < 1 || o.rays > (1 << 20))
+    throw InputError("--rays must be between 1 and 1048576, got " + std::to_string(o.rays));
+  if (o.threads < 0) throw InputError("--threads must be 0 (all cores) or more, got " + std::to_string(o.threads));
+}
+
+RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
+                              const RowMatrixX3d& normals, const TransferOptions& opt,
+                              TransferStats* stats, const ProgressFn& progress) {
+  check_transfer_options(opt);
+  const int K = sh_count(opt.order);
+  const Eigen::Index P = points.rows();
+  RowMatrixXd out(P, K);
+  auto t0 = std::chrono::steady_clock::now();
+  parallel_points(P, opt.threads, [&](const tbb::blocked_range<Eigen::Index>& range) {
+    thread_local PointRays buf;
+    double y[kMaxShOrder * kMaxShOrder];
+    double acc[kMaxShOrder * kMaxShOrder];
+    const uint32_t R = static_cast<uint32_t>(opt.rays);
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+      trace_point(scene, points, normals, i, opt, buf);
+      // Visible counts of the even (A) and odd (B) halves.
+      uint32_t visible[2] = {0, 0}, size[2] = {(R + 1) / 2, R / 2};
+      for (uint32_t k = 0; k < R; ++k) visible[k & 1] += !occluded(buf.rays[k]);
+      // β of a half comes from the other half; with a single ray there is no other half.
+      double beta[2];
+      beta[0] = size[1] ? (2 * visible[1] >= size[1] ? 1.0 : 0.0) : 1.0;
+      beta[1] = 2 * visible[0] >= size[0] ? 1.0 : 0.0;
+      std::fill(acc, acc + K, 0.0);
+      for (uint32_t k = 0; k < R; ++k) {
+        double v = occluded(buf.rays[k]) ? 0.0 : 1.0;
+        double w = v - beta[k & 1];
+        if (w == 0.0) continue;
+        const Eigen::Vector3d& d = buf.directions[k];
+        sh_eval(opt.order, d.x(), d.y(), d.z(), y);
+        for (int c = 0; c < K; ++c) acc[c] += w * y[c];
+      }
+      const double scale = M_PI / R;
+      const double beta_mean = (size[0] * beta[0] + size[1] * beta[1]) / R;
+      double* row = out.row(i).data();
+      if (beta_mean != 0.0) {
+        unshadowed_transfer(opt.order, normals.row(i).transpose(), row);
+        for (int c = 0; c < K; ++c) row[c] = beta_mean * row[c] + scale * acc[c];
+      } else {
+        for (int c = 0; c < K; ++c) row[c] = scale * acc[c];
+      }
+    }
+    if (progress) progress(static_cast<size_t>(range.size()));
+  });
+  scene.check("tracing transfer rays");
+  if (stats) {
+    stats->seconds = seconds_since(t0);
+    stats->rays = static_cast<uint64_t>(P) * static_cast<uint64_t>(opt.rays);
+  }
+  return out;
+}
+
+uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
+                             const RowMatrixX3d& normals, const TransferOptions& opt,
+                             TransferStats* stats) {
+  check_transfer_options(opt);
+  std::atomic<uint64_t> hits{0};
+  auto t0 = std::chrono::steady_clock::now();
+  parallel_points(points.rows(), opt.threads, [&](const tbb::blocked_range<Eigen::Index>& range) {
+    thread_local PointRays buf;
+    uint64_t local = 0;
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+      trace_point(scene, points, normals, i, opt, buf);
+      for (const RTCRay& r : buf.rays) local += occluded(r);
+    }
+    hits += local;
+  });
+  scene.check("tracing benchmark rays");
+  if (stats) {
+    stats->seconds = seconds_since(t0);
+    stats->rays = static_cast<uint64_t>(points.rows()) * static_cast<uint64_t>(opt.rays);
+  }
+  return hits.load();
+}
+
+}  // namespace prtsub

@@ -1,0 +1,45 @@
+// Shadowed diffuse SH transfer at surface points, traced with Embree.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "prt/ray_scene.h"
+
+namespace prtsub {
+
+struct TransferOptions {
+  int order = 4;       //!< SH order N (N² coefficients), 1..10
+  int rays = 256;      //!< rays per point
+  uint64_t seed = 0;   //!< the result is a function of (seed, point index), not of threads
+  int threads = 0;     //!< 0: every core
+};
+
+//! Called from worker threads with the number of points just finished.
+using ProgressFn = std::function<void(size_t points_done)>;
+
+struct TransferStats {
+  uint64_t rays = 0;
+  double seconds = 0;
+};
+
+//! t_i(p) = ∫ V(p,ω) max(n·ω,0) y_i(ω) dω at each point.
+//! \param points #P by 3 world positions on the surface of `scene`
+//! \param normals #P by 3 unit shading normals
+//! \return #P by N² row-major transfer
+//! \throw InputError for an order or ray count out of range, EmbreeError on Embree failure
+RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
+                              const RowMatrixX3d& normals, const TransferOptions& options,
+                              TransferStats* stats = nullptr, const ProgressFn& progress = {});
+
+//! The baseline for benchmarks: the same rays from the same points with the same thread
+//! count, with nothing done but counting occluded rays.
+//! \return the number of occluded rays
+uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
+                             const RowMatrixX3d& normals, const TransferOptions& options,
+                             TransferStats* stats = nullptr);
+
+//! Validates options; \throw InputError naming the bad value.
+void check_transfer_options(const TransferOptions& options);
+
+}  // namespace prtsub

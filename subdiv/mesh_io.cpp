@@ -1,0 +1,466 @@
+// Mesh readers and the builder that turns what a file says into a Mesh.
+//
+// Parsers only tokenise; every check lives in build_mesh so all formats fail the same way:
+// an empty mesh, a non-finite coordinate or an out-of-range index is an InputError naming
+// the file and the first offender. What a real asset tolerably has (collapsed and zero-area
+// faces, duplicates, unreferenced vertices, winding conflicts, non-manifold edges) is kept or
+// dropped as documented in MeshDefects and counted.
+//
+// Welding is by exact position (+0 and -0 are equal). Render vertices are keyed by
+// (welded position, normal): with file normals, by the normal's exact value; otherwise by the
+// crease-aware smoothing group of compute_corner_normals.
+#include "subdiv/mesh_io.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+
+#include "subdiv/exceptions.h"
+#include "subdiv/normals.h"
+#include "subdiv/ply.h"
+
+namespace prtsub {
+namespace {
+
+// Splits a buffer into lines and whitespace tokens without copying.
+struct LineCursor {
+  const std::string& bytes;
+  size_t pos = 0;
+  size_t line_no = 0;
+  bool next(std::string_view& line) {
+    if (pos >= bytes.size()) return false;
+    size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) eol = bytes.size();
+    line = std::string_view(bytes.data() + pos, eol - pos);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos = eol + 1;
+    ++line_no;
+    return true;
+  }
+};
+
+bool next_token(std::string_view& s, std::string_view& tok) {
+  size_t i = 0;
+  while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+  if (i == s.size()) return false;
+  size_t j = i;
+  while (j < s.size() && !std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+  tok = s.substr(i, j - i);
+  s.remove_prefix(j);
+  return true;
+}
+
+[[noreturn]] void bad_line(const std::string& path, size_t line_no, const std::string& what) {
+  throw InputError(path + ":" + std::to_string(line_no) + ": " + what);
+}
+
+double parse_double(std::string_view tok, const std::string& path, size_t line_no) {
+  double v = 0;
+  auto r = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  if (r.ec != std::errc() || r.ptr != tok.data() + tok.size())
+    bad_line(path, line_no, "bad number '" + std::string(tok.substr(0, 32)) + "'");
+  return v;
+}
+
+int64_t parse_int(std::string_view tok, const std::string& path, size_t line_no) {
+  int64_t v = 0;
+  auto r = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  if (r.ec != std::errc() || r.ptr != tok.data() + tok.size())
+    bad_line(path, line_no, "bad index '" + std::string(tok.substr(0, 32)) + "'");
+  return v;
+}
+
+void read_xyz(std::string_view& rest, std::vector<double>& out, const std::string& path,
+              size_t line_no) {
+  std::string_view tok;
+  for (int k = 0; k < 3; ++k) {
+    if (!next_token(rest, tok)) bad_line(path, line_no, "expected three coordinates");
+    out.push_back(parse_double(tok, path, line_no));
+  }
+}
+
+RowMatrixX3d to_matrix(const std::vector<double>& xyz) {
+  RowMatrixX3d m(static_cast<Eigen::Index>(xyz.size() / 3), 3);
+  if (!xyz.empty()) std::memcpy(m.data(), xyz.data(), xyz.size() * sizeof(double));
+  return m;
+}
+
+std::string lower_extension(const std::string& path) {
+  size_t dot = path.find_last_of('.');
+  size_t slash = path.find_last_of('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+struct PositionKey {
+  double x, y, z;
+  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PositionHash {
+  size_t operator()(const PositionKey& k) const {
+    uint64_t h = 1469598103934665603ull;
+    for (double d : {k.x, k.y, k.z}) {
+      d = d == 0.0 ? 0.0 : d;  // -0 and +0 weld
+      uint64_t b;
+      std::memcpy(&b, &d, 8);
+      h = (h ^ b) * 1099511628211ull;
+      h ^= h >> 29;
+    }
+    return static_cast<size_t>(h);
+  }
+};
+
+}  // namespace
+
+RawMesh parse_obj(const std::string& bytes, const std::string& path) {
+  std::vector<double> pos, nrm;
+  RawMesh raw;
+  raw.face_offsets.push_back(0);
+  bool any_corner_normal = false;
+  LineCursor lines{bytes};
+  std::string_view line, tok;
+  while (lines.next(line)) {
+    std::string_view rest = line;
+    if (!next_token(rest, tok) || tok[0] == '#') continue;
+    if (tok == "v") {
+      read_xyz(rest, pos, path, lines.line_no);
+    } else if (tok == "vn") {
+      read_xyz(rest, nrm, path, lines.line_no);
+    } else if (tok == "f") {
+      const int64_t nv = static_cast<int64_t>(pos.size() / 3), nn = static_cast<int64_t>(nrm.size() / 3);
+      while (next_token(rest, tok)) {
+        // v, v/t, v//n or v/t/n; negative indices count back from the latest element.
+        size_t s1 = tok.find('/');
+        int64_t v = parse_int(tok.substr(0, s1), path, lines.line_no);
+        if (v == 0) bad_line(path, lines.line_no, "face index 0 (OBJ indices start at 1)");
+        raw.face_indices.push_back(v > 0 ? v - 1 : nv + v);
+        int64_t n = -1;
+        if (s1 != std::string_view::npos) {
+          size_t s2 = tok.find('/', s1 + 1);
+          if (s2 != std::string_view::npos && s2 + 1 < tok.size()) {
+            int64_t ni = parse_int(tok.substr(s2 + 1), path, lines.line_no);
+            n = ni > 0 ? ni - 1 : nn + ni;
+            if (ni == 0 || n < 0 || n >= nn)
+              bad_line(path, lines.line_no, "normal index " + std::to_string(ni) + " out of range (" +
+                                                std::to_string(nn) + " normals so far)");
+            any_corner_normal = true;
+          }
+        }
+        raw.corner_normals.push_back(n);
+      }
+      raw.face_offsets.push_back(raw.face_indices.size());
+    }
+    // vt, o, g, s, usemtl, mtllib, l, p: not geometry we bake.
+  }
+  raw.positions = to_matrix(pos);
+  raw.normals = to_matrix(nrm);
+  if (!any_corner_normal) raw.corner_normals.clear(), raw.normals.resize(0, 3);
+  return raw;
+}
+
+RawMesh parse_off(const std::string& bytes, const std::string& path) {
+  LineCursor lines{bytes};
+  std::string_view line, tok;
+  // Collect the data lines, stripped of comments, as token streams.
+  auto next_data = [&](std::string_view& rest) {
+    while (lines.next(line)) {
+      size_t hash = line.find('#');
+      rest = line.substr(0, hash);
+      std::string_view probe = rest, t;
+      if (next_token(probe, t)) return true;
+    }
+    return false;
+  };
+  std::string_view rest;
+  if (!next_data(rest) || !next_token(rest, tok) || tok.size() < 3 ||
+      tok.substr(tok.size() - 3) != "OFF")
+    throw InputError(path + ": not an OFF file (no OFF keyword)");
+  const bool has_normals = tok.find('N') != std::string_view::npos;
+  if (tok.find('4') != std::string_view::npos || tok.find("ST") != std::string_view::npos)
+    throw InputError(path + ": OFF variant '" + std::string(tok) + "' is not supported");
+  std::string_view count_tok;
+  if (!next_token(rest, count_tok)) {
+    if (!next_data(rest) || !next_token(rest, count_tok))
+      throw InputError(path + ": OFF file ends before its counts");
+  }
+  int64_t nv = parse_int(count_tok, path, lines.line_no), nf = 0;
+  if (!next_token(rest, tok)) bad_line(path, lines.line_no, "expected vertex and face counts");
+  nf = parse_int(tok, path, lines.line_no);
+  if (nv < 0 || nf < 0 || static_cast<uint64_t>(nv) > bytes.size() ||
+      static_cast<uint64_t>(nf) > bytes.size())
+    bad_line(path, lines.line_no, "bad vertex or face count");
+  std::vector<double> pos, nrm;
+  pos.reserve(static_cast<size_t>(nv) * 3);
+  for (int64_t i = 0; i < nv; ++i) {
+    if (!next_data(rest))
+      throw InputError(path + ": truncated OFF (" + std::to_string(i) + " of " + std::to_string(nv) +
+                       " vertices)");
+    read_xyz(rest, pos, path, lines.line_no);
+    if (has_normals) read_xyz(rest, nrm, path, lines.line_no);
+  }
+  RawMesh raw;
+  raw.face_offsets.push_back(0);
+  for (int64_t i = 0; i < nf; ++i) {
+    if (!next_data(rest))
+      throw InputError(path + ": truncated OFF (" + std::to_string(i) + " of " + std::to_string(nf) +
+                       " faces)");
+    next_token(rest, tok);
+    int64_t n = parse_int(tok, path, lines.line_no);
+    if (n < 0 || n > 1000000) bad_line(path, lines.line_no, "bad face size");
+    for (int64_t k = 0; k < n; ++k) {
+      if (!next_token(rest, tok)) bad_line(path, lines.line_no, "face has fewer indices than its size");
+      raw.face_indices.push_back(parse_int(tok, path, lines.line_no));
+    }
+    raw.face_offsets.push_back(raw.face_indices.size());
+  }
+  raw.positions = to_matrix(pos);
+  raw.normals = to_matrix(nrm);
+  return raw;
+}
+
+RawMesh parse_stl(const std::string& bytes, const std::string& path) {
+  RawMesh raw;
+  raw.face_offsets.push_back(0);
+  std::vector<double> pos;
+  auto starts_solid = [&] {
+    size_t i = bytes.find_first_not_of(" \t\r\n");
+    return i != std::string::npos && bytes.compare(i, 5, "solid") == 0;
+  };
+  uint32_t count = 0;
+  if (bytes.size() >= 84) std::memcpy(&count, bytes.data() + 80, 4);
+  const bool binary = bytes.size() >= 84 && (84 + 50ull * count == bytes.size() || !starts_solid());
+  if (binary) {
+    if (84 + 50ull * count > bytes.size())
+      throw InputError(path + ": truncated binary STL (header says " + std::to_string(count) +
+                       " triangles, the file holds " + std::to_string((bytes.size() - 84) / 50) + ")");
+    pos.reserve(count * 9ull);
+    for (uint32_t t = 0; t < count; ++t) {
+      const char* rec = bytes.data() + 84 + 50ull * t + 12;  // skip the facet normal
+      for (int k = 0; k < 9; ++k) {
+        float v;
+        std::memcpy(&v, rec + 4 * k, 4);
+        pos.push_back(v);
+      }
+      for (int k = 0; k < 3; ++k) raw.face_indices.push_back(3ll * t + k);
+      raw.face_offsets.push_back(raw.face_indices.size());
+    }
+  } else {
+    if (!starts_solid()) throw InputError(path + ": not an STL file");
+    LineCursor lines{bytes};
+    std::string_view line, tok;
+    size_t in_loop = 0;
+    while (lines.next(line)) {
+      std::string_view rest = line;
+      if (!next_token(rest, tok)) continue;
+      if (tok == "vertex") {
+        read_xyz(rest, pos, path, lines.line_no);
+        raw.face_indices.push_back(static_cast<int64_t>(pos.size() / 3 - 1));
+        ++in_loop;
+      } else if (tok == "endloop") {
+        raw.face_offsets.push_back(raw.face_indices.size());
+        in_loop = 0;
+      }
+    }
+    if (in_loop) throw InputError(path + ": truncated ASCII STL (last facet has no endloop)");
+  }
+  raw.positions = to_matrix(pos);
+  return raw;
+}
+
+RawMesh parse_ply_mesh(const std::string& bytes, const std::string& path) {
+  PlyFile ply = parse_ply(bytes, path);
+  const PlyElement* v = ply.element("vertex");
+  const PlyElement* f = ply.element("face");
+  if (!v) throw InputError(path + ": PLY has no vertex element");
+  const std::vector<double>*x = v->scalar("x"), *y = v->scalar("y"), *z = v->scalar("z");
+  if (!x || !y || !z) throw InputError(path + ": PLY vertex element lacks x, y or z");
+  RawMesh raw;
+  raw.positions.resize(static_cast<Eigen::Index>(v->count), 3);
+  for (size_t i = 0; i < v->count; ++i)
+    raw.positions.row(static_cast<Eigen::Index>(i)) << (*x)[i], (*y)[i], (*z)[i];
+  const std::vector<double>*nx = v->scalar("nx"), *ny = v->scalar("ny"), *nz = v->scalar("nz");
+  if (nx && ny && nz) {
+    raw.normals.resize(static_cast<Eigen::Index>(v->count), 3);
+    for (size_t i = 0; i < v->count; ++i)
+      raw.normals.row(static_cast<Eigen::Index>(i)) << (*nx)[i], (*ny)[i], (*nz)[i];
+  }
+  raw.face_offsets.push_back(0);
+  if (f) {
+    int li = f->list("vertex_indices");
+    if (li < 0) li = f->list("vertex_index");
+    if (li < 0) throw InputError(path + ": PLY face element lacks vertex_indices");
+    const auto& offs = f->list_offsets[static_cast<size_t>(li)];
+    const auto& vals = f->list_values[static_cast<size_t>(li)];
+    raw.face_indices.reserve(vals.size());
+    for (double d : vals) raw.face_indices.push_back(static_cast<int64_t>(d));
+    raw.face_offsets.assign(offs.begin(), offs.end());
+  }
+  return raw;
+}
+
+Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& options) {
+  const size_t nin = static_cast<size_t>(raw.positions.rows());
+  const size_t nfaces_in = raw.face_offsets.empty() ? 0 : raw.face_offsets.size() - 1;
+  if (nin == 0) throw InputError(path + ": empty mesh (no vertices)");
+  if (nfaces_in == 0) throw InputError(path + ": empty mesh (no faces)");
+  for (size_t i = 0; i < nin; ++i)
+    if (!raw.positions.row(static_cast<Eigen::Index>(i)).allFinite())
+      throw InputError(path + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+  for (size_t f = 0; f < nfaces_in; ++f)
+    for (size_t c = raw.face_offsets[f]; c < raw.face_offsets[f + 1]; ++c)
+      if (raw.face_indices[c] < 0 || static_cast<size_t>(raw.face_indices[c]) >= nin)
+        throw InputError(path + ": face " + std::to_string(f) + " refers to vertex " +
+                         std::to_string(raw.face_indices[c]) + ", but the file has " +
+                         std::to_string(nin) + " vertices (0-based)");
+  const bool per_vertex_normals = raw.corner_normals.empty() && raw.normals.rows() == raw.positions.rows();
+  const bool per_corner_normals = !raw.corner_normals.empty();
+
+  Mesh mesh;
+  mesh.input_vertices = nin;
+  MeshDefects& d = mesh.defects;
+
+  // Weld referenced vertices by exact position, in input order.
+  std::vector<char> referenced(nin, 0);
+  for (int64_t i : raw.face_indices) referenced[static_cast<size_t>(i)] = 1;
+  std::vector<uint32_t> weld(nin, UINT32_MAX);
+  std::unordered_map<PositionKey, uint32_t, PositionHash> seen;
+  seen.reserve(nin);
+  std::vector<double> welded;
+  welded.reserve(nin * 3);
+  for (size_t i = 0; i < nin; ++i) {
+    if (!referenced[i]) {
+      ++d.unreferenced_vertices;
+      continue;
+    }
+    auto r = raw.positions.row(static_cast<Eigen::Index>(i));
+    auto [it, inserted] = seen.emplace(PositionKey{r(0), r(1), r(2)}, static_cast<uint32_t>(welded.size() / 3));
+    if (inserted) {
+      welded.insert(welded.end(), {r(0), r(1), r(2)});
+    } else {
+      ++d.welded_vertices;
+    }
+    weld[i] = it->second;
+  }
+  mesh.positions = to_matrix(welded);
+  if (mesh.positions.rows() > UINT32_MAX / 4)
+    throw InputError(path + ": too many vertices for 32-bit indices");
+
+  // Fan-triangulate; keep, per kept triangle, its input corners (for file normals).
+  std::vector<Triangle> tri_pos;                // welded position indices
+  std::vector<std::array<size_t, 3>> tri_corner;  // corner slots in raw.face_indices
+  for (size_t f = 0; f < nfaces_in; ++f) {
+    size_t b = raw.face_offsets[f], n = raw.face_offsets[f + 1] - b;
+    if (n < 3) {
+      ++d.degenerate_faces;
+      continue;
+    }
+    if (n > 3) ++d.polygons_triangulated;
+    for (size_t k = 1; k + 1 < n; ++k) {
+      std::array<size_t, 3> c = {b, b + k, b + k + 1};
+      Triangle t;
+      for (int j = 0; j < 3; ++j) t[j] = weld[static_cast<size_t>(raw.face_indices[c[j]])];
+      uint32_t src = static_cast<uint32_t>(mesh.input_triangles++);
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+        ++d.degenerate_faces;
+        continue;
+      }
+      tri_pos.push_back(t);
+      tri_corner.push_back(c);
+      mesh.source_face.push_back(src);
+    }
+  }
+  if (tri_pos.empty()) throw InputError(path + ": empty mesh (every face is degenerate)");
+
+  // Zero-area and duplicate faces (kept).
+  const double diag = bounds(mesh.positions).diagonal();
+  const double min_area = (1e-7 * diag) * (1e-7 * diag);
+  std::unordered_map<uint64_t, uint32_t> face_seen;  // hash of sorted triple -> first face
+  face_seen.reserve(tri_pos.size());
+  for (size_t f = 0; f < tri_pos.size(); ++f) {
+    const Triangle& t = tri_pos[f];
+    if (triangle_area(mesh.positions.row(t[0]), mesh.positions.row(t[1]), mesh.positions.row(t[2])) <= min_area)
+      ++d.zero_area_faces;
+    Triangle s = t;
+    std::sort(s.begin(), s.end());
+    uint64_t key = (uint64_t(s[0]) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(s[1]) << 21) ^ (uint64_t(s[2]) * 0xC2B2AE3D27D4EB4Full);
+    auto [it, inserted] = face_seen.emplace(key, static_cast<uint32_t>(f));
+    if (!inserted) {
+      Triangle o = tri_pos[it->second];
+      std::sort(o.begin(), o.end());
+      if (o == s) ++d.duplicate_faces;
+    }
+  }
+  EdgeCounts ec = count_edges(tri_pos);
+  d.boundary_edges = ec.boundary;
+  d.non_manifold_edges = ec.non_manifold;
+  d.winding_conflicts = ec.winding_conflicts;
+
+  // Render vertices: computed normals everywhere, then file normals where the file has them.
+  CornerNormals computed = compute_corner_normals(mesh.positions, tri_pos, options.crease_angle_deg);
+  struct VertexKey {
+    uint32_t position;
+    uint64_t a, b;  // group id, or the normal's bits
+    bool operator==(const VertexKey& o) const { return position == o.position && a == o.a && b == o.b; }
+  };
+  struct VertexHash {
+    size_t operator()(const VertexKey& k) const {
+      return static_cast<size_t>((k.position * 0x9E3779B97F4A7C15ull) ^ (k.a * 0xC2B2AE3D27D4EB4Full) ^ (k.b + 0x165667B19E3779F9ull));
+    }
+  };
+  std::unordered_map<VertexKey, uint32_t, VertexHash> vertex_of;
+  vertex_of.reserve(tri_pos.size() * 2);
+  std::vector<double> normals;
+  mesh.triangles.resize(tri_pos.size());
+  for (size_t f = 0; f < tri_pos.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t p = tri_pos[f][k];
+      Eigen::Vector3d n = computed.normals.row(computed.group[f * 3 + k]).transpose();
+      VertexKey key{p, 0, computed.group[f * 3 + k]};
+      int64_t file_row = -1;
+      if (per_corner_normals) file_row = raw.corner_normals[tri_corner[f][k]];
+      if (per_vertex_normals) file_row = raw.face_indices[tri_corner[f][k]];
+      if (file_row >= 0) {
+        Eigen::Vector3d fn = raw.normals.row(static_cast<Eigen::Index>(file_row)).transpose();
+        double len = fn.norm();
+        if (len > 0 && std::isfinite(len)) {
+          n = fn / len;
+          key.a = 1;
+          std::memcpy(&key.b, &n.x(), 8);
+          uint64_t yz[2];
+          std::memcpy(yz, &n.y(), 8);
+          std::memcpy(yz + 1, &n.z(), 8);
+          key.a = 1 + (yz[0] ^ (yz[1] * 0x9E3779B97F4A7C15ull));
+          mesh.normals_from_file = true;
+        } else {
+          ++d.invalid_file_normals;
+        }
+      }
+      auto [it, inserted] = vertex_of.emplace(key, static_cast<uint32_t>(mesh.vertex_position.size()));
+      if (inserted) {
+        mesh.vertex_position.push_back(p);
+        normals.insert(normals.end(), {n.x(), n.y(), n.z()});
+      }
+      mesh.triangles[f][k] = it->second;
+    }
+  }
+  mesh.normals = to_matrix(normals);
+  return mesh;
+}
+
+Mesh load_mesh(const std::string& path, const LoadOptions& options) {
+  const std::string ext = lower_extension(path);
+  if (ext != "obj" && ext != "ply" && ext != "off" && ext != "stl")
+    throw InputError(path + ": unknown mesh format '." + ext + "' (expected .obj, .ply, .off or .stl)");
+  const std::string bytes = read_file_bytes(path);
+  RawMesh raw = ext == "obj"   ? parse_obj(bytes, path)
+                : ext == "ply" ? parse_ply_mesh(bytes, path)
+                : ext == "off" ? parse_off(bytes, path)
+                               : parse_stl(bytes, path);
+  return build_mesh(raw, path, options);
+}
+
+}  // namespace prtsub

@@ -1,0 +1,147 @@
+// Crease-aware vertex normals.
+//
+// Every corner starts in its own group. For each manifold edge (exactly two faces, opposite
+// traversal) whose two face normals are within the crease angle, the corners of the two faces
+// at each end of the edge are united (union-find). A group is then a fan of faces around one
+// position connected through smooth edges, so a position gets one normal per crease side and
+// faces that only touch at a vertex (bow-ties) never share one. The group's normal is the
+// angle-weighted sum of its faces' normals (Thürmer and Wüthrich), which does not depend on
+// how a polygon was triangulated.
+#include "subdiv/normals.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace prtsub {
+namespace {
+
+struct UnionFind {
+  std::vector<uint32_t> parent;
+  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  uint32_t find(uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+}  // namespace
+
+CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
+                                     const std::vector<Triangle>& triangles,
+                                     double crease_angle_deg) {
+  const size_t nf = triangles.size();
+  std::vector<Eigen::Vector3d> face_normal(nf);
+  std::vector<std::array<double, 3>> corner_angle(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    Eigen::Vector3d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = positions.row(triangles[f][k]).transpose();
+    Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+    double len = n.norm();
+    face_normal[f] = (len > 0 && std::isfinite(len)) ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
+      double an = a.norm(), bn = b.norm();
+      corner_angle[f][k] =
+          (an > 0 && bn > 0) ? std::acos(std::clamp(a.dot(b) / (an * bn), -1.0, 1.0)) : 0.0;
+    }
+  }
+
+  // Half-edges sorted by undirected key: runs of two with opposite direction are manifold.
+  struct HalfEdge {
+    uint64_t key;
+    uint32_t face;
+    uint8_t corner;  // the half-edge runs from corner to corner+1
+  };
+  std::vector<HalfEdge> half;
+  half.reserve(nf * 3);
+  for (uint32_t f = 0; f < nf; ++f)
+    for (uint8_t k = 0; k < 3; ++k) {
+      uint32_t a = triangles[f][k], b = triangles[f][(k + 1) % 3];
+      half.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), f, k});
+    }
+  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.key < y.key || (x.key == y.key && x.face < y.face);
+  });
+
+  const double cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0, 180.0) * M_PI / 180.0);
+  UnionFind uf(nf * 3);
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i;
+    while (j < half.size() && half[j].key == half[i].key) ++j;
+    if (j - i == 2) {
+      const HalfEdge &h = half[i], &g = half[i + 1];
+      uint32_t ha = triangles[h.face][h.corner], ga = triangles[g.face][g.corner];
+      bool opposite = ha != ga;
+      const Eigen::Vector3d &nh = face_normal[h.face], &ng = face_normal[g.face];
+      bool degenerate = nh.isZero() || ng.isZero();
+      if (opposite && (degenerate || nh.dot(ng) >= cos_crease)) {
+        // h runs a->b with corners (h.corner, h.corner+1); g runs b->a.
+        uint32_t h0 = h.face * 3 + h.corner, h1 = h.face * 3 + (h.corner + 1) % 3;
+        uint32_t g0 = g.face * 3 + g.corner, g1 = g.face * 3 + (g.corner + 1) % 3;
+        uf.unite(h0, g1);
+        uf.unite(h1, g0);
+      }
+    }
+    i = j;
+  }
+
+  CornerNormals out;
+  out.group.assign(nf * 3, 0);
+  std::vector<uint32_t> root_to_group(nf * 3, UINT32_MAX);
+  std::vector<Eigen::Vector3d> sum;
+  for (uint32_t c = 0; c < nf * 3; ++c) {
+    uint32_t r = uf.find(c);
+    if (root_to_group[r] == UINT32_MAX) {
+      root_to_group[r] = static_cast<uint32_t>(sum.size());
+      sum.push_back(Eigen::Vector3d::Zero());
+    }
+    uint32_t g = root_to_group[r];
+    out.group[c] = g;
+    sum[g] += corner_angle[c / 3][c % 3] * face_normal[c / 3];
+  }
+
+  // Groups made only of zero-area faces take the area-weighted normal of every face at
+  // their position, ignoring creases; failing that, +z.
+  std::vector<Eigen::Vector3d> at_position;
+  out.normals.resize(static_cast<Eigen::Index>(sum.size()), 3);
+  for (size_t g = 0; g < sum.size(); ++g) {
+    double len = sum[g].norm();
+    if (len > 1e-300 && std::isfinite(len)) {
+      out.normals.row(static_cast<Eigen::Index>(g)) = (sum[g] / len).transpose();
+    } else {
+      out.normals.row(static_cast<Eigen::Index>(g)).setConstant(std::nan(""));
+    }
+  }
+  bool need_fallback = false;
+  for (Eigen::Index g = 0; g < out.normals.rows(); ++g) need_fallback |= std::isnan(out.normals(g, 0));
+  if (need_fallback) {
+    at_position.assign(static_cast<size_t>(positions.rows()), Eigen::Vector3d::Zero());
+    for (size_t f = 0; f < nf; ++f) {
+      Eigen::Vector3d p0 = positions.row(triangles[f][0]).transpose();
+      Eigen::Vector3d n = (Eigen::Vector3d(positions.row(triangles[f][1]).transpose()) - p0)
+                              .cross(Eigen::Vector3d(positions.row(triangles[f][2]).transpose()) - p0);
+      if (!n.allFinite()) continue;
+      for (int k = 0; k < 3; ++k) at_position[triangles[f][k]] += n;
+    }
+    for (uint32_t c = 0; c < nf * 3; ++c) {
+      Eigen::Index g = out.group[c];
+      if (!std::isnan(out.normals(g, 0))) continue;
+      Eigen::Vector3d n = at_position[triangles[c / 3][c % 3]];
+      double len = n.norm();
+      if (len > 1e-300 && std::isfinite(len)) {
+        out.normals.row(g) = (n / len).transpose();
+      } else {
+        out.normals.row(g) << 0, 0, 1;
+      }
+      ++out.fallback_normals;
+    }
+  }
+  return out;
+}
+
+}  // namespace prtsub
