@@ -6,14 +6,17 @@
 //     t̂ = β t_u + (π/R) Σ (V_k − β) y(ω_k)
 // is unbiased. β = 1 estimates only the blocked part (exact when nothing is blocked); β = 0
 // estimates only the visible part (exact when everything is). We split the R rays into two
-// interleaved halves of the lattice and give each half the β chosen from the *other* half's
-// visible fraction (1 if at least half visible, else 0). The choice is independent of the
-// half it weights, so t̂ stays unbiased; an unoccluded point is exact at any ray count, a
-// fully enclosed one is exactly zero, and SH are evaluated only for rays with V_k ≠ β —
-// the minority — which keeps the stage close to a bare occlusion loop.
+// halves, each its own lattice with its own independent random shift, and give each half the
+// β chosen from the *other* half's visible fraction (1 if at least half visible, else 0).
+// Independence matters: with one shared shift the halves' directions are correlated and the
+// choice biases the estimate (the statistical test in transfer_test.cpp caught exactly that).
+// With it, t̂ is unbiased; an unoccluded point is exact at any ray count, a fully enclosed one
+// is exactly zero from two rays up, and SH are evaluated only for rays with V_k ≠ β — the
+// minority — which keeps the stage close to a bare occlusion loop. With a single ray there
+// is no other half and β = 1.
 //
-// Directions come from a Fibonacci lattice (low discrepancy for any R), shifted per point by
-// a hash of (seed, point index): decorrelated between points and identical for any thread
+// Directions come from Fibonacci lattices (low discrepancy for any size), shifted by hashes
+// of (seed, point index, half): decorrelated between points and identical for any thread
 // count. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
 // 20-45% faster than single rays.
 #include "prt/transfer.h"
@@ -52,10 +55,13 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
   tangent_frame(n, t, b);
   Eigen::Vector3f local = scene.to_local(points.row(i).transpose());
   Eigen::Vector3f origin = local + scene.ray_offset(local) * n.cast<float>();
+  // Ray k belongs to half k & 1; each half is a lattice of its own size and shift.
   Rng rng(opt.seed, static_cast<uint64_t>(i));
-  const double su = rng.uniform(), sv = rng.uniform();
+  const double shift[2][2] = {{rng.uniform(), rng.uniform()}, {rng.uniform(), rng.uniform()}};
+  const uint32_t half_size[2] = {(R + 1) / 2, R / 2};
   for (uint32_t k = 0; k < R; ++k) {
-    Eigen::Vector3d d = lattice_cosine_direction(k, R, su, sv);
+    const uint32_t h = k & 1;
+    Eigen::Vector3d d = lattice_cosine_direction(k >> 1, half_size[h], shift[h][0], shift[h][1]);
     Eigen::Vector3d w = (d.x() * t + d.y() * b + d.z() * n).normalized();
     buf.directions[k] = w;
     init_occlusion_ray(buf.rays[k], origin, w.cast<float>());

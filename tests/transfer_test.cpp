@@ -1,1 +1,184 @@
+#include "prt/transfer.h"
+
 #include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "helpers.h"
+#include "prt/sh.h"
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+RowMatrixX3d vertex_points(const Mesh& m) {
+  RowMatrixX3d p(static_cast<Eigen::Index>(m.num_vertices()), 3);
+  for (size_t v = 0; v < m.num_vertices(); ++v) p.row(static_cast<Eigen::Index>(v)) = m.point(static_cast<uint32_t>(v)).transpose();
+  return p;
+}
+
+RowMatrixXd bake(const Mesh& m, const TransferOptions& o) {
+  RayScene scene(m.positions, position_triangles(m));
+  return shadowed_transfer(scene, vertex_points(m), m.normals, o);
+}
+
+TEST(Transfer, ConvexMeshMatchesClosedFormBandNormsThroughOrder8) {
+  // Every vertex of a convex mesh sees the whole hemisphere of its normal: the control
+  // variate makes the estimate exact at any ray count, so per-band norms equal
+  // |Â_l| sqrt((2l+1)/4π) to rounding.
+  Mesh m = test::build(test::icosphere(2));
+  for (int rays : {1, 7, 64}) {
+    TransferOptions o;
+    o.order = 8;
+    o.rays = rays;
+    RowMatrixXd t = bake(m, o);
+    for (Eigen::Index v = 0; v < t.rows(); ++v)
+      for (int l = 0; l < o.order; ++l) {
+        double expect = std::abs(clamped_cosine_band(l)) * std::sqrt((2 * l + 1) / (4 * M_PI));
+        EXPECT_NEAR(t.row(v).segment(l * l, 2 * l + 1).norm(), expect, 1e-5) << "vertex " << v << " band " << l << " rays " << rays;
+      }
+  }
+}
+
+TEST(Transfer, PointUnderAnInfiniteOccluderIsExactlyZero) {
+  // A plane 1 unit above, 10^4 units across: everything but a sliver of horizon below
+  // 10^-4 rad is blocked (cosine-weighted mass ~10^-8), so no ray escapes.
+  RawMesh plane = test::quad(1e4, 1.0, false);
+  Mesh m = test::build(plane);
+  RayScene scene(m.positions, position_triangles(m));
+  RowMatrixX3d p(3, 3), n(3, 3);
+  p << 0, 0, 0, 5, -3, 0.5, -100, 40, -2;
+  n << 0, 0, 1, 0, 0, 1, 0, 0, 1;  // a tilted hemisphere would see below the plane
+  TransferOptions o;
+  o.order = 6;
+  for (int rays : {2, 3, 256}) {  // one ray has no other half to choose β from
+    o.rays = rays;
+    RowMatrixXd t = shadowed_transfer(scene, p, n, o);
+    EXPECT_EQ(t.cwiseAbs().maxCoeff(), 0.0) << rays << " rays";
+  }
+}
+
+// Point at the origin, normal +z, under a half-plane z = 1 covering x > 0: half occluded.
+struct HalfOccluded {
+  Mesh mesh = test::build(test::quad(1e4, 1.0, false, 0.0));
+  RayScene scene{mesh.positions, position_triangles(mesh)};
+  RowMatrixX3d p = RowMatrixX3d::Zero(1, 3), n = (RowMatrixX3d(1, 3) << 0, 0, 1).finished();
+  RowMatrixXd run(int order, int rays, uint64_t seed) {
+    TransferOptions o;
+    o.order = order, o.rays = rays, o.seed = seed;
+    return shadowed_transfer(scene, p, n, o);
+  }
+};
+
+TEST(Transfer, HighRayReferenceMatchesAnalyticHalfSpace) {
+  // ∫_{ω_x<0, ω_z>0} ω_z y_i(ω) dω by product quadrature (Gauss-Legendre in ω_z, azimuth
+  // restricted to the open half), independent of any ray tracing.
+  HalfOccluded h;
+  const int order = 4, K = sh_count(order);
+  std::vector<double> x, w;
+  test::gauss_legendre(64, x, w);
+  Eigen::VectorXd exact = Eigen::VectorXd::Zero(K);
+  for (size_t i = 0; i < x.size(); ++i) {
+    double c = 0.5 * (x[i] + 1), s = std::sqrt(1 - c * c);
+    const int na = 512;
+    for (int j = 0; j < na; ++j) {
+      double phi = M_PI / 2 + M_PI * (j + 0.5) / na;  // ω_x < 0
+      Eigen::Vector3d d(s * std::cos(phi), s * std::sin(phi), c);
+      exact += 0.5 * w[i] * (M_PI / na) * c * sh_eval(order, d);
+    }
+  }
+  RowMatrixXd ref = h.run(order, 1 << 16, 12345);
+  // The lattice reference at 65536 rays is far better than 1/sqrt(R); 2e-3 leaves room for
+  // the discontinuity at ω_x = 0 and the finite plane.
+  EXPECT_LT((ref.row(0).transpose() - exact).cwiseAbs().maxCoeff(), 2e-3);
+}
+
+TEST(Transfer, EstimatorIsUnbiasedAgainstHighRayReference) {
+  // M independent low-ray estimates (different seeds) of a half-occluded point; for each
+  // coefficient the mean's deviation from a 65536-ray reference, divided by its standard error
+  // (sample std / sqrt(M), plus the reference's own share), must stay below 4.5.
+  HalfOccluded h;
+  const int order = 4, K = sh_count(order), rays = 32, M = 400;
+  RowMatrixXd ref = h.run(order, 1 << 16, 999);
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(K), sum2 = Eigen::VectorXd::Zero(K);
+  for (int s = 0; s < M; ++s) {
+    Eigen::VectorXd t = h.run(order, rays, static_cast<uint64_t>(s)).row(0).transpose();
+    sum += t;
+    sum2 += t.cwiseProduct(t);
+  }
+  Eigen::VectorXd mean = sum / M;
+  Eigen::VectorXd var = (sum2 / M - mean.cwiseProduct(mean)) * (double(M) / (M - 1));
+  int informative = 0;
+  for (int c = 0; c < K; ++c) {
+    double se = std::sqrt(var[c] / M + var[c] * rays / double(1 << 16));
+    if (se < 1e-12) {  // a coefficient with no variance must be exact
+      EXPECT_NEAR(mean[c], ref(0, c), 1e-9) << "coefficient " << c;
+      continue;
+    }
+    ++informative;
+    EXPECT_LT(std::abs(mean[c] - ref(0, c)) / se, 4.5) << "coefficient " << c << " mean " << mean[c] << " ref " << ref(0, c);
+  }
+  EXPECT_GE(informative, 8);  // the configuration really is noisy, so the test has power
+}
+
+TEST(Transfer, SameResultTranslatedByAMillionAndScaledDownTenThousandfold) {
+  // A sphere resting on a plane: contact shadows near the ground, open sky above. The scene is
+  // traced in coordinates relative to its bounding box, and the ray offset scales with it, so
+  // moving or scaling the scene changes the transfer far less than the estimator's own noise
+  // (measured as the mean change between two seeds). In float world coordinates a 10^6 offset
+  // would quantise this unit sphere to 1/16 of a unit and fail by far more than the noise.
+  // Rays that graze a mesh edge exactly may still flip with a 1-ulp change: hence "within noise"
+  // rather than bitwise equality.
+  RawMesh scene = test::merge(test::icosphere(2), test::quad(3.0, -1.0, true));
+  TransferOptions o;
+  o.rays = 128;
+  RowMatrixXd base = bake(test::build(scene), o);
+  o.seed = 1;
+  const double noise = (bake(test::build(scene), o) - base).cwiseAbs().mean();
+  o.seed = 0;
+  ASSERT_GT(noise, 1e-3);
+  for (auto [scale, offset] : {std::pair<double, double>{1.0, 1e6}, {1e-4, 0.0}, {1e-4, 3.0}}) {
+    RowMatrixXd t = bake(test::build(test::transformed(scene, scale, Eigen::Vector3d::Constant(offset))), o);
+    ASSERT_EQ(t.rows(), base.rows());
+    EXPECT_LT((t - base).cwiseAbs().mean(), 0.1 * noise) << "scale " << scale << " offset " << offset;
+  }
+}
+
+TEST(Transfer, DeterministicForAnyThreadCountAndSeedSensitive) {
+  Mesh m = test::build(test::merge(test::icosphere(2), test::quad(3.0, -1.0, true)));
+  TransferOptions o;
+  o.rays = 32;
+  o.threads = 1;
+  RowMatrixXd one = bake(m, o);
+  o.threads = 2;
+  RowMatrixXd two = bake(m, o);
+  EXPECT_EQ((one - two).cwiseAbs().maxCoeff(), 0.0);
+  o.seed = 1;
+  RowMatrixXd other = bake(m, o);
+  EXPECT_GT((one - other).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Transfer, RejectsBadOptions) {
+  Mesh m = test::build(test::cube());
+  TransferOptions o;
+  o.order = 11;
+  EXPECT_THROW(bake(m, o), InputError);
+  o.order = 0;
+  EXPECT_THROW(bake(m, o), InputError);
+  o.order = 4;
+  o.rays = 0;
+  EXPECT_THROW(bake(m, o), InputError);
+}
+
+TEST(Transfer, HighOrderAndSingleRayStayFinite) {
+  Mesh m = test::build(test::merge(test::icosphere(1), test::quad(3.0, -1.0, true)));
+  TransferOptions o;
+  o.order = kMaxShOrder;
+  o.rays = 1;
+  RowMatrixXd t = bake(m, o);
+  EXPECT_TRUE(t.allFinite());
+  EXPECT_EQ(t.cols(), 100);
+}
+
+}  // namespace
+}  // namespace prtsub

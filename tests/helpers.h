@@ -1,0 +1,51 @@
+// Procedural fixtures shared by the tests.
+#pragma once
+
+#include <string>
+
+#include "subdiv/mesh_io.h"
+
+namespace prtsub::test {
+
+//! A unit icosphere (radius 1 at the origin) subdivided `levels` times, as a RawMesh.
+RawMesh icosphere(int levels);
+//! An axis-aligned unit cube [0,1]^3 with outward winding, 12 triangles.
+RawMesh cube();
+//! A square in the plane z = height spanning [-half, half]^2 (or [x0, half] in x), facing `up`.
+RawMesh quad(double half, double height, bool facing_up, double x0 = NAN);
+//! Concatenates meshes (no welding).
+RawMesh merge(const RawMesh& a, const RawMesh& b);
+//! Applies p -> scale * p + offset.
+RawMesh transformed(const RawMesh& m, double scale, const Eigen::Vector3d& offset);
+//! Builds a Mesh with default options.
+Mesh build(const RawMesh& m, double crease_angle = 60.0);
+
+//! Writes an OBJ of the raw mesh (positions and faces; 17 significant digits).
+void write_obj(const std::string& path, const RawMesh& m);
+
+//! A fresh empty directory for one test, removed with its contents by the destructor.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  std::string path(const std::string& name) const { return dir_ + "/" + name; }
+
+ private:
+  std::string dir_;
+};
+
+bool file_exists(const std::string& path);
+void write_text(const std::string& path, const std::string& text);
+//! Directory of ../shared/scenes, or "" when this clone has none.
+std::string shared_scenes();
+
+}  // namespace prtsub::test
+
+namespace prtsub::test {
+//! Gauss-Legendre nodes and weights on [-1, 1]; exact for polynomials of degree < 2n.
+void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights);
+//! A uniformly random rotation matrix from a seeded generator.
+Eigen::Matrix3d random_rotation(uint64_t seed);
+//! A uniformly random unit vector.
+Eigen::Vector3d random_direction(uint64_t seed);
+}  // namespace prtsub::test
