@@ -310,6 +310,8 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
   for (size_t i = 0; i < nin; ++i)
     if (!raw.positions.row(static_cast<Eigen::Index>(i)).allFinite())
       throw InputError(path + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+    else if (raw.positions.row(static_cast<Eigen::Index>(i)).cwiseAbs().maxCoeff() > 1e30)
+      throw InputError(path + ": vertex " + std::to_string(i) + " has a coordinate beyond single-precision range");
   for (size_t f = 0; f < nfaces_in; ++f)
     for (size_t c = raw.face_offsets[f]; c < raw.face_offsets[f + 1]; ++c)
       if (raw.face_indices[c] < 0 || static_cast<size_t>(raw.face_indices[c]) >= nin)

@@ -1,1 +1,96 @@
+#include "prt/asset.h"
+
 #include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "helpers.h"
+#include "prt/sh.h"
+#include "subdiv/exceptions.h"
+#include "subdiv/ply.h"
+
+namespace prtsub {
+namespace {
+
+RowMatrixXd ramp(const Mesh& m, int K) {
+  RowMatrixXd t(static_cast<Eigen::Index>(m.num_vertices()), K);
+  for (Eigen::Index v = 0; v < t.rows(); ++v)
+    for (int c = 0; c < K; ++c) t(v, c) = 0.25 * static_cast<double>(v) - 0.125 * c;
+  return t;
+}
+
+TEST(Asset, RoundTripsEveryField) {
+  test::TempDir dir;
+  Mesh m = test::build(test::cube());
+  RowMatrixXd t = ramp(m, 9);
+  Metadata meta = sh_convention_metadata(3);
+  meta.push_back({"rays", "64"});
+  write_asset(dir.path("a.ply"), m, t, meta);
+  Asset a = read_asset(dir.path("a.ply"));
+  EXPECT_EQ(a.order, 3);
+  ASSERT_EQ(a.transfer.rows(), static_cast<Eigen::Index>(m.num_vertices()));
+  EXPECT_EQ((a.transfer - t).cwiseAbs().maxCoeff(), 0.0);  // values chosen exact in float
+  EXPECT_LT((a.normals - m.normals).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_EQ(a.triangles, m.triangles);
+  EXPECT_EQ(a.source_face, m.source_face);
+  for (size_t v = 0; v < m.num_vertices(); ++v)
+    EXPECT_EQ((a.positions.row(static_cast<Eigen::Index>(v)) - m.positions.row(m.vertex_position[v])).norm(), 0.0);
+  ASSERT_GE(a.metadata.size(), 5u);
+  EXPECT_EQ(a.metadata[2].first, "sh_order");
+  EXPECT_EQ(a.metadata[2].second, "3");
+  EXPECT_EQ(a.metadata.back().second, "64");
+  // Header declares exactly the documented properties, in order.
+  PlyFile ply = read_ply(dir.path("a.ply"));
+  EXPECT_EQ(ply.format, "binary_little_endian");
+  std::vector<std::string> expect = {"x", "y", "z", "nx", "ny", "nz"};
+  for (int c = 0; c < 9; ++c) expect.push_back("t" + std::to_string(c));
+  EXPECT_EQ(ply.element("vertex")->scalar_names, expect);
+  EXPECT_EQ(ply.element("face")->scalar_names, std::vector<std::string>{"source_face"});
+}
+
+TEST(Asset, NonFiniteTransferIsRefusedAndLeavesNoFile) {
+  test::TempDir dir;
+  Mesh m = test::build(test::cube());
+  RowMatrixXd t = ramp(m, 4);
+  t(3, 2) = std::nan("");
+  EXPECT_THROW(write_asset(dir.path("nan.ply"), m, t, {}), InputError);
+  EXPECT_FALSE(test::file_exists(dir.path("nan.ply")));
+  t(3, 2) = 1e39;  // finite in double, infinite in float
+  EXPECT_THROW(write_asset(dir.path("big.ply"), m, t, {}), InputError);
+  EXPECT_FALSE(test::file_exists(dir.path("big.ply")));
+  EXPECT_TRUE(std::filesystem::is_empty(std::filesystem::path(dir.path(""))));
+}
+
+TEST(Asset, ReaderRejectsCorruptAssets) {
+  test::TempDir dir;
+  Mesh m = test::build(test::cube());
+  write_asset(dir.path("ok.ply"), m, ramp(m, 4), {});
+  std::string bytes = read_file_bytes(dir.path("ok.ply"));
+  // NaN in a transfer value.
+  std::string nan = bytes;
+  size_t body = nan.find("end_header\n") + 11;
+  float q = std::nanf("");
+  std::memcpy(&nan[body + 4 * 7], &q, 4);  // vertex 0, t1
+  test::write_text(dir.path("nan.ply"), nan);
+  EXPECT_THROW(read_asset(dir.path("nan.ply")), InputError);
+  // Truncated.
+  test::write_text(dir.path("cut.ply"), bytes.substr(0, bytes.size() - 3));
+  EXPECT_THROW(read_asset(dir.path("cut.ply")), InputError);
+  // Out-of-range face index.
+  std::string idx = bytes;
+  int32_t big = 1000;
+  std::memcpy(&idx[bytes.size() - 16], &big, 4);
+  test::write_text(dir.path("idx.ply"), idx);
+  EXPECT_THROW(read_asset(dir.path("idx.ply")), InputError);
+  // A mesh without transfer is not an asset.
+  test::write_text(dir.path("mesh.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                         "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                                         "element face 1\nproperty list uchar int vertex_indices\nproperty int source_face\n"
+                                         "end_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2 0\n");
+  EXPECT_THROW(read_asset(dir.path("mesh.ply")), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub

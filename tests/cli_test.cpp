@@ -1,1 +1,111 @@
+#include "cli/commands.h"
+
 #include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "helpers.h"
+#include "prt/asset.h"
+#include "prt/sh.h"
+#include "subdiv/ply.h"
+
+namespace prtsub {
+namespace {
+
+int run(std::vector<std::string> args) {
+  args.insert(args.begin(), "prtsub");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  return run_cli(static_cast<int>(argv.size()), argv.data());
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  test::TempDir dir;
+  std::string scene() {
+    std::string p = dir.path("scene.obj");
+    test::write_obj(p, test::merge(test::icosphere(1), test::quad(3.0, -1.0, true)));
+    return p;
+  }
+  size_t files() const {
+    size_t n = 0;
+    for (auto& e : std::filesystem::directory_iterator(dir.path(""))) n += e.is_regular_file();
+    return n;
+  }
+};
+
+TEST_F(Cli, BakeWritesAnAssetAndAReportWithTheDocumentedKeys) {
+  std::string in = scene(), out = dir.path("a.ply"), rep = dir.path("r.json");
+  ASSERT_EQ(run({"bake", in, "-o", out, "--order", "3", "--rays", "16", "--report", rep}), 0);
+  Asset a = read_asset(out);
+  EXPECT_EQ(a.order, 3);
+  EXPECT_EQ(a.triangles.size(), 82u);
+  std::string json = read_file_bytes(rep);
+  for (const char* key : {"triangles_in", "vertices_in", "triangles_out", "vertices_out", "rays", "seconds_total",
+                          "seconds_load", "seconds_scene", "seconds_transfer", "seconds_write", "rays_per_second",
+                          "defects_zero_area_faces", "defects_non_manifold_edges", "defects_winding_conflicts"})
+    EXPECT_NE(json.find(std::string("\"") + key + "\""), std::string::npos) << key;
+  EXPECT_NE(json.find("\"rays\": " + std::to_string(a.transfer.rows() * 16)), std::string::npos);
+  EXPECT_EQ(run({"inspect", out}), 0);
+  EXPECT_EQ(run({"inspect", out, "--report", dir.path("i.json")}), 0);
+  EXPECT_NE(read_file_bytes(dir.path("i.json")).find("\"order_99_percent_energy\""), std::string::npos);
+}
+
+TEST_F(Cli, BadInputExitsNonZeroAndLeavesNoOutput) {
+  test::write_text(dir.path("nan.obj"), "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+  test::write_text(dir.path("empty.obj"), "");
+  size_t before = files();
+  EXPECT_EQ(run({"bake", dir.path("nan.obj"), "-o", dir.path("out.ply")}), 1);
+  EXPECT_EQ(run({"bake", dir.path("empty.obj"), "-o", dir.path("out.ply"), "--report", dir.path("r.json")}), 1);
+  EXPECT_EQ(run({"bake", dir.path("missing.obj"), "-o", dir.path("out.ply")}), 1);
+  EXPECT_EQ(run({"bake", dir.path("nan.obj"), "-o", dir.path("no/such/dir/out.ply")}), 1);
+  EXPECT_EQ(files(), before);  // no asset, no report, no temporary file
+  EXPECT_EQ(run({"inspect", dir.path("nan.obj")}), 1);
+}
+
+TEST_F(Cli, UsageErrorsNameTheOption) {
+  std::string in = scene();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("a.ply"), "--bogus", "1"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("a.ply"), "--order", "11"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("a.ply"), "--rays", "many"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("a.ply"), "--crease-angle", "-5"}), 2);
+  EXPECT_EQ(run({"bake", in}), 2);
+  EXPECT_EQ(run({"bake", in, "-o"}), 2);
+  EXPECT_EQ(run({"frobnicate"}), 2);
+  std::string err = testing::internal::GetCapturedStderr();
+  for (const char* what : {"--bogus", "--order", "--rays", "--crease-angle", "-o ASSET.ply", "--output", "frobnicate"})
+    EXPECT_NE(err.find(what), std::string::npos) << what << " in:\n" << err;
+  EXPECT_EQ(files(), 1u);  // only the scene
+}
+
+TEST_F(Cli, HelpForEveryCommand) {
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({"--help"}), 0);
+  for (const char* c : {"bake", "inspect", "bench"}) EXPECT_EQ(run({c, "--help"}), 0);
+  std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("--crease-angle"), std::string::npos);
+  EXPECT_NE(out.find("usage: prtsub inspect"), std::string::npos);
+}
+
+TEST_F(Cli, BenchReportsBothRates) {
+  std::string in = scene(), rep = dir.path("b.json");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bench", in, "--rays", "8", "--repeat", "1", "--report", rep}), 0);
+  testing::internal::GetCapturedStdout();
+  std::string json = read_file_bytes(rep);
+  EXPECT_NE(json.find("\"transfer_rays_per_second\""), std::string::npos);
+  EXPECT_NE(json.find("\"bare_rays_per_second\""), std::string::npos);
+}
+
+TEST_F(Cli, BundledExampleBakes) {
+  std::string example = std::string(PRTSUB_EXAMPLES) + "/spot/spot_control_mesh.obj";
+  ASSERT_TRUE(test::file_exists(example));
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({"bake", example, "-o", dir.path("spot.ply"), "--rays", "32"}), 0);
+  testing::internal::GetCapturedStdout();
+  EXPECT_EQ(read_asset(dir.path("spot.ply")).triangles.size(), 372u);
+}
+
+}  // namespace
+}  // namespace prtsub

@@ -1,1 +1,207 @@
+#include "subdiv/mesh_io.h"
+
 #include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "helpers.h"
+#include "prt/sampling.h"
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+// A unit square as two triangles, in each format, with identical geometry.
+const char* kSquareObj = "# square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+
+std::string binary_ply(bool big_endian, int declared_faces = 2, size_t cut = 0) {
+  std::string h = std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                  " 1.0\ncomment test\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face " + std::to_string(declared_faces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  auto put = [&](const void* p, size_t n) {
+    std::string b(static_cast<const char*>(p), n);
+    if (big_endian) std::reverse(b.begin(), b.end());
+    h += b;
+  };
+  float v[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  for (auto& p : v)
+    for (float c : p) put(&c, 4);
+  int f[2][3] = {{0, 1, 2}, {0, 2, 3}};
+  for (auto& t : f) {
+    h += char(3);
+    for (int i : t) put(&i, 4);
+  }
+  return cut ? h.substr(0, h.size() - cut) : h;
+}
+
+std::string binary_stl(uint32_t declared, size_t triangles) {
+  std::string s(80, ' ');
+  s.append(reinterpret_cast<const char*>(&declared), 4);
+  float tri[2][9] = {{0, 0, 0, 1, 0, 0, 1, 1, 0}, {0, 0, 0, 1, 1, 0, 0, 1, 0}};
+  for (size_t t = 0; t < triangles; ++t) {
+    float normal[3] = {0, 0, 1};
+    s.append(reinterpret_cast<const char*>(normal), 12);
+    s.append(reinterpret_cast<const char*>(tri[t % 2]), 36);
+    s.append(2, '\0');
+  }
+  return s;
+}
+
+void expect_square(const Mesh& m) {
+  EXPECT_EQ(m.input_triangles, 2u);
+  EXPECT_EQ(m.num_faces(), 2u);
+  EXPECT_EQ(m.positions.rows(), 4);
+  EXPECT_EQ(m.num_vertices(), 4u);  // flat: one smoothing group per position
+  for (size_t v = 0; v < m.num_vertices(); ++v) EXPECT_NEAR(m.normals(static_cast<Eigen::Index>(v), 2), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(m.positions.col(0).sum(), 2.0);
+  EXPECT_EQ(m.defects.boundary_edges, 4u);
+}
+
+class MeshIo : public ::testing::Test {
+ protected:
+  test::TempDir dir;
+  std::string file(const std::string& name, const std::string& bytes) {
+    std::string p = dir.path(name);
+    test::write_text(p, bytes);
+    return p;
+  }
+  // The error must name the file and contain `what`.
+  template <class E = InputError>
+  void expect_error(const std::string& path, const std::string& what) {
+    try {
+      load_mesh(path);
+      ADD_FAILURE() << "no error for " << path;
+    } catch (const E& e) {
+      std::string msg = e.what();
+      EXPECT_NE(msg.find(path), std::string::npos) << msg;
+      EXPECT_NE(msg.find(what), std::string::npos) << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+    }
+  }
+};
+
+TEST_F(MeshIo, EveryFormatReadsTheSameSquare) {
+  expect_square(load_mesh(file("a.obj", kSquareObj)));
+  expect_square(load_mesh(file("a.OBJ", kSquareObj)));
+  expect_square(load_mesh(file("a.off", "OFF\n# c\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n")));
+  expect_square(load_mesh(file("a.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                        "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                        "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n")));
+  expect_square(load_mesh(file("le.ply", binary_ply(false))));
+  expect_square(load_mesh(file("be.ply", binary_ply(true))));
+  expect_square(load_mesh(file("b.stl", binary_stl(2, 2))));
+  expect_square(load_mesh(file("a.stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\n"
+                                        "endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 1 0\n"
+                                        "vertex 0 1 0\nendloop\nendfacet\nendsolid s\n")));
+}
+
+TEST_F(MeshIo, PolygonsAreFanTriangulatedAndNegativeIndicesResolve) {
+  Mesh m = load_mesh(file("q.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 1.5 0\nf -5 -4 -3 -1 -2\n"));
+  EXPECT_EQ(m.input_triangles, 3u);
+  EXPECT_EQ(m.num_faces(), 3u);
+  EXPECT_EQ(m.defects.polygons_triangulated, 1u);
+  std::vector<uint32_t> src(m.source_face.begin(), m.source_face.end());
+  EXPECT_EQ(src, (std::vector<uint32_t>{0, 1, 2}));
+}
+
+TEST_F(MeshIo, ObjNormalsAreUsedAsGiven) {
+  // Per-corner normals that differ from the face normal must survive unchanged (normalised).
+  Mesh m = load_mesh(file("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 0.6 0 0.8\nf 1//1 2//2 3//1\n"));
+  EXPECT_TRUE(m.normals_from_file);
+  ASSERT_EQ(m.num_vertices(), 3u);
+  EXPECT_NEAR(m.normals(1, 0), 0.6, 1e-12);
+  EXPECT_NEAR(m.normals(1, 2), 0.8, 1e-12);
+  EXPECT_NEAR(m.normals(0, 2), 1.0, 1e-12);
+}
+
+TEST_F(MeshIo, PlyNormalsAreUsedAsGiven) {
+  Mesh m = load_mesh(file("n.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                                   "property double z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                                   "element face 1\nproperty list uchar uint vertex_index\nend_header\n"
+                                   "0 0 0 0 0 1\n1 0 0 0 1 0\n0 1 0 1 0 0\n3 0 1 2\n"));
+  EXPECT_TRUE(m.normals_from_file);
+  EXPECT_NEAR(m.normals(1, 1), 1.0, 1e-12);
+  EXPECT_NEAR(m.normals(2, 0), 1.0, 1e-12);
+}
+
+TEST_F(MeshIo, WeldsExactPositionsIncludingSignedZero) {
+  // Two triangles whose shared edge is written twice, once with -0.
+  Mesh m = load_mesh(file("w.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv -0 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 4 5 6\n"));
+  EXPECT_EQ(m.positions.rows(), 4);
+  EXPECT_EQ(m.defects.welded_vertices, 2u);
+  EXPECT_EQ(m.defects.boundary_edges, 4u);
+}
+
+TEST_F(MeshIo, ToleratedDefectsAreCounted) {
+  std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 9 9 9\nv 2 0 0\nv 0.5 0 0\n"
+      "f 1 2 3\n"   // base
+      "f 1 3 4\n"   // neighbour, consistent winding
+      "f 3 2 1\n"   // back-to-back twin of face 1: duplicate
+      "f 1 2 5\n"   // third face on edge 1-2: non-manifold (and a winding conflict with face 1)
+      "f 1 1 2\n"   // collapsed: dropped
+      "f 1 7 8\n";  // zero area (collinear)
+  Mesh m = load_mesh(file("d.obj", obj));
+  EXPECT_EQ(m.input_triangles, 6u);
+  EXPECT_EQ(m.num_faces(), 5u);
+  EXPECT_EQ(m.defects.degenerate_faces, 1u);
+  EXPECT_EQ(m.defects.duplicate_faces, 1u);
+  EXPECT_EQ(m.defects.zero_area_faces, 1u);
+  EXPECT_EQ(m.defects.unreferenced_vertices, 1u);  // v 9 9 9
+  EXPECT_GE(m.defects.non_manifold_edges, 1u);
+  // source_face skips the collapsed face.
+  EXPECT_EQ(m.source_face.back(), 5u);
+}
+
+TEST_F(MeshIo, InconsistentWindingIsCounted) {
+  Mesh m = load_mesh(file("wind.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 4 3\n"));
+  EXPECT_EQ(m.defects.winding_conflicts, 1u);
+}
+
+TEST_F(MeshIo, BadInputIsOneLineNamingTheFile) {
+  expect_error<IoError>(dir.path("missing.obj"), "cannot open");
+  expect_error(file("x.xyz", kSquareObj), "unknown mesh format");
+  expect_error(file("e.obj", "# nothing\n"), "empty mesh");
+  expect_error(file("v.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"), "no faces");
+  expect_error(file("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "non-finite");
+  expect_error(file("inf.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n"), "non-finite");
+  expect_error(file("idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), "refers to vertex 3");
+  expect_error(file("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n"), "refers to vertex -1");
+  expect_error(file("idx.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "refers to vertex 7");
+  expect_error(file("bad.obj", "v 0 0 zero\n"), "bad number");
+  expect_error(file("cut.ply", binary_ply(false, 2, 5)), "truncated");
+  expect_error(file("lie.ply", binary_ply(false, 2000000)), "truncated");
+  expect_error(file("cut.stl", binary_stl(2, 1)), "truncated");
+  expect_error(file("cut.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n"), "truncated");
+  expect_error(file("hdr.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"), "end_header");
+  expect_error(file("noply.ply", "solid\n"), "not a PLY");
+  expect_error(file("asc.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                               "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n"), "truncated");
+  expect_error(file("d.obj", "v 0 0 0\nv 1 0 0\nf 1 2 2\n"), "every face is degenerate");
+  expect_error(file("huge.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                "end_header\n1e39 0 0\n3 0 0 0\n"), "single-precision range");
+}
+
+TEST_F(MeshIo, RandomBytesNeverCrash) {
+  // Corrupt real files at random positions: every outcome is a mesh or an InputError.
+  std::string ply = binary_ply(false);
+  for (uint64_t s = 0; s < 300; ++s) {
+    std::string bytes = ply;
+    Rng rng(s, 3);
+    for (int k = 0; k < 4; ++k) bytes[static_cast<size_t>(rng.next() % bytes.size())] = static_cast<char>(rng.next());
+    std::string p = file("fuzz" + std::to_string(s % 3) + (s % 2 ? ".ply" : ".obj"), s % 2 ? bytes : std::string(kSquareObj).substr(0, rng.next() % 60));
+    try {
+      Mesh m = load_mesh(p);
+      EXPECT_TRUE(m.positions.allFinite());
+      for (auto& t : m.triangles)
+        for (uint32_t v : t) EXPECT_LT(v, m.num_vertices());
+    } catch (const InputError&) {
+    }
+  }
+}
+
+}  // namespace
+}  // namespace prtsub

@@ -1,1 +1,77 @@
+// End-to-end checks on the real meshes in ../shared/scenes. A user's clone has none: then these
+// tests skip and say so. CI has ../shared beside the checkout, and there they run.
 #include <gtest/gtest.h>
+
+#include "helpers.h"
+#include "prt/transfer.h"
+#include "subdiv/mesh_io.h"
+
+namespace prtsub {
+namespace {
+
+struct SceneFacts {
+  const char* file;
+  size_t triangles, vertices, boundary_edges;
+  size_t duplicate_positions, zero_area;
+};
+
+// From ../shared/scenes/README.md ("What is in each mesh").
+const SceneFacts kScenes[] = {
+    {"cornell_box.obj", 32, 28, 16, 0, 0},          {"spot_control_mesh.obj", 372, 188, 0, 0, 0},
+    {"house_on_site.obj", 2710, 2108, 1176, 837, 4}, {"mori_knob.obj", 11970, 6091, 44, 0, 0},
+    {"teapot.obj", 15704, 7850, 0, 0, 0},           {"chinese_dragon.obj", 19994, 10000, 6, 0, 0},
+    {"bunny.ply", 69451, 34834, 223, 0, 0},         {"sibenik.obj", 75284, 40979, 9182, 761, 11},
+    {"armadillo.ply", 345944, 172974, 0, 0, 0},     {"conference.ply", 331179, 194399, 55609, 5366, 0},
+};
+
+class Scenes : public ::testing::TestWithParam<SceneFacts> {};
+
+TEST_P(Scenes, LoadsWithTheDocumentedCounts) {
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  const SceneFacts& s = GetParam();
+  Mesh m = load_mesh(dir + "/" + s.file);
+  EXPECT_EQ(m.input_triangles, s.triangles);
+  EXPECT_EQ(m.input_vertices, s.vertices);
+  EXPECT_EQ(m.defects.welded_vertices, s.duplicate_positions);
+  EXPECT_EQ(m.defects.zero_area_faces, s.zero_area);
+  EXPECT_EQ(m.defects.degenerate_faces, 0u);
+  EXPECT_EQ(m.defects.unreferenced_vertices, 0u);
+  if (s.duplicate_positions == 0) {
+    // Nothing to weld: topology exactly as the README counts it.
+    EXPECT_EQ(m.num_faces(), s.triangles);
+    EXPECT_EQ(m.defects.boundary_edges, s.boundary_edges);
+    EXPECT_EQ(m.defects.non_manifold_edges, 0u);
+    EXPECT_EQ(m.defects.winding_conflicts, 0u);
+  }
+  EXPECT_TRUE(m.normals.allFinite());
+  EXPECT_GE(m.num_vertices(), static_cast<size_t>(m.positions.rows()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Shared, Scenes, ::testing::ValuesIn(kScenes), [](const auto& param_info) {
+  std::string name = param_info.param.file;
+  return name.substr(0, name.find('.'));
+});
+
+TEST(ScenesTransfer, CornellBoxHasContactShadowsAndNoNaN) {
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  Mesh m = load_mesh(dir + "/cornell_box.obj");
+  RayScene scene(m.positions, position_triangles(m));
+  RowMatrixX3d p(static_cast<Eigen::Index>(m.num_vertices()), 3);
+  for (uint32_t v = 0; v < m.num_vertices(); ++v) p.row(v) = m.point(v).transpose();
+  TransferOptions o;
+  o.rays = 256;
+  RowMatrixXd t = shadowed_transfer(scene, p, m.normals, o);
+  ASSERT_TRUE(t.allFinite());
+  // Inside a box open at one side, every vertex is partly shadowed: its DC term lies strictly
+  // between 0 and the unshadowed π·y00 = sqrt(π)/2.
+  const double open_dc = std::sqrt(M_PI) / 2;
+  for (Eigen::Index v = 0; v < t.rows(); ++v) {
+    EXPECT_LT(t(v, 0), open_dc * 0.999) << "vertex " << v;
+    EXPECT_GT(t(v, 0), -1e-9) << "vertex " << v;
+  }
+}
+
+}  // namespace
+}  // namespace prtsub
