@@ -128,6 +128,7 @@ int cmd_bake(int argc, char** argv) {
   meta.push_back({"source", c.input});
   meta.push_back({"rays", std::to_string(c.transfer.rays)});
   meta.push_back({"seed", std::to_string(c.transfer.seed)});
+  meta.push_back({"threads", std::to_string(c.transfer.threads) + " (results do not depend on it)"});
   meta.push_back({"crease_angle", std::to_string(c.crease_angle)});
   meta.push_back({"normals", mesh.normals_from_file ? "file" : "computed"});
   meta.push_back({"estimator", "cosine-lattice cross-fitted-control-variate"});
