@@ -61,6 +61,18 @@ void ArgParser::option(const std::string& name, const std::string& metavar, cons
                       }});
 }
 
+void ArgParser::option(const std::string& name, const std::string& metavar, const std::string& help,
+                       std::vector<std::string>* out) {
+  options_.push_back({name, metavar, help + " (repeatable)", [name, out](const std::string& v) {
+                        if (v.empty()) throw UsageError(name + ": expected a value");
+                        out->push_back(v);
+                      }});
+}
+
+void ArgParser::flag(const std::string& name, const std::string& help, bool* out) {
+  options_.push_back({name, "", help, [out](const std::string&) { *out = true; }, false});
+}
+
 void ArgParser::alias(const std::string& short_name, const std::string& long_name) {
   aliases_.emplace_back(short_name, long_name);
 }
@@ -93,7 +105,9 @@ bool ArgParser::parse(int argc, char** argv, int first) {
       }
       const Spec* spec = find(arg);
       if (!spec) throw UsageError(command_ + ": unknown option '" + arg + "' (see prtsub " + command_ + " --help)");
-      if (!inline_value) {
+      if (!spec->takes_value) {
+        if (inline_value) throw UsageError(spec->name + ": takes no value");
+      } else if (!inline_value) {
         if (i + 1 >= argc) throw UsageError(spec->name + ": expected a value");
         value = argv[++i];
       }

@@ -26,6 +26,10 @@ class ArgParser {
   void option(const std::string& name, const std::string& metavar, const std::string& help, int* out, int lo, int hi);
   void option(const std::string& name, const std::string& metavar, const std::string& help, uint64_t* out);
   void option(const std::string& name, const std::string& metavar, const std::string& help, double* out, double lo, double hi);
+  //! A repeatable option: every occurrence is appended.
+  void option(const std::string& name, const std::string& metavar, const std::string& help, std::vector<std::string>* out);
+  //! An option without a value.
+  void flag(const std::string& name, const std::string& help, bool* out);
   //! A short alias such as -o for an option already declared.
   void alias(const std::string& short_name, const std::string& long_name);
 
@@ -38,6 +42,7 @@ class ArgParser {
   struct Spec {
     std::string name, metavar, help;
     std::function<void(const std::string&)> set;
+    bool takes_value = true;
   };
   const Spec* find(const std::string& name) const;
   std::string command_, summary_;

@@ -1,0 +1,90 @@
+// OpenImageIO wrapper. OIIO reports errors through geterror(); every failure becomes an
+// IoError naming the file. PNG output is encoded to sRGB here, explicitly: OIIO would
+// otherwise quantise float data linearly while tagging the file sRGB (STACK.md).
+#include "prt/image_io.h"
+
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+std::string extension(const std::string& path) {
+  size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos) return "";
+  std::string ext = path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+
+}  // namespace
+
+double linear_to_srgb(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+
+Image read_image(const std::string& path) {
+  if (::access(path.c_str(), R_OK) != 0) throw IoError(path + ": cannot open image (no such readable file)");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw IoError(path + ": cannot read image (" + OIIO::geterror() + ")");
+  const OIIO::ImageSpec& spec = in->spec();
+  Image img;
+  img.width = spec.width, img.height = spec.height, img.channels = spec.nchannels;
+  if (img.width <= 0 || img.height <= 0 || img.channels <= 0) throw InputError(path + ": image has no pixels");
+  img.pixels.resize(static_cast<size_t>(img.width) * img.height * img.channels);
+  if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
+    throw IoError(path + ": cannot read image pixels (" + in->geterror() + ")");
+  const bool eight_bit = spec.format == OIIO::TypeDesc::UINT8;
+  in->close();
+  if (eight_bit) {
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+      if (img.channels < 4 || i % 4 != 3) img.pixels[i] = static_cast<float>(srgb_to_linear(img.pixels[i]));
+  }
+  return img;
+}
+
+void write_image(const std::string& path, const Image& img, const ImageWriteOptions& options) {
+  const std::string ext = extension(path);
+  if (ext != "exr" && ext != "png") throw InputError(path + ": unknown image format (use .exr or .png)");
+  // Temporary name keeps the extension so OIIO picks the right writer.
+  const std::string tmp = path.substr(0, path.size() - ext.size() - 1) + ".tmp" + std::to_string(::getpid()) + "." + ext;
+  auto out = OIIO::ImageOutput::create(tmp);
+  if (!out) throw IoError(path + ": no image writer (" + OIIO::geterror() + ")");
+  bool ok;
+  if (ext == "exr") {
+    OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::FLOAT);
+    ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data());
+  } else {
+    OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    std::vector<unsigned char> bytes(img.pixels.size());
+    for (size_t i = 0; i < bytes.size(); ++i) {
+      const bool alpha = img.channels == 4 && i % 4 == 3;
+      double v = alpha ? std::clamp<double>(img.pixels[i], 0, 1) : linear_to_srgb(options.exposure * img.pixels[i]);
+      bytes[i] = static_cast<unsigned char>(std::lround(255 * (std::isfinite(v) ? v : 0.0)));
+    }
+    ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+  }
+  std::string err = ok ? "" : out->geterror();
+  ok = out->close() && ok;
+  if (!ok) {
+    std::remove(tmp.c_str());
+    throw IoError(path + ": cannot write image (" + (err.empty() ? out->geterror() : err) + ")");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw IoError(path + ": cannot move image into place");
+  }
+}
+
+}  // namespace prtsub

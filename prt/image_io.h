@@ -1,0 +1,28 @@
+// Reading and writing images. The only translation unit that includes OpenImageIO.
+#pragma once
+
+#include <string>
+
+#include "prt/lights.h"
+
+namespace prtsub {
+
+//! Reads any image OpenImageIO can (EXR, HDR, PNG, ...) as linear float, all channels.
+//! 8-bit formats are converted from sRGB to linear.
+//! \throw IoError if missing or unreadable, InputError if it has no pixels
+Image read_image(const std::string& path);
+
+struct ImageWriteOptions {
+  double exposure = 1.0;  //!< PNG only: linear values are multiplied by this before encoding
+};
+
+//! Writes by extension: .exr is linear float (all channels as given); .png is tone-mapped
+//! 8-bit sRGB: clamp(exposure · v, 0, 1), then the sRGB curve; alpha is kept linear.
+//! Goes through a temporary file renamed into place.
+//! \throw IoError, InputError for an unknown extension
+void write_image(const std::string& path, const Image& image, const ImageWriteOptions& options = {});
+
+//! The sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
+double linear_to_srgb(double v);
+
+}  // namespace prtsub

@@ -1,0 +1,76 @@
+// Relit frames: primary rays through a pinhole camera, shaded from per-vertex transfer
+// (Gouraud, exactly what a GPU does with per-vertex PRT) or from transfer computed at every
+// pixel (the per-pixel reference). Also the image error between two frames.
+#pragma once
+
+#include <string>
+
+#include "prt/lights.h"
+#include "prt/ray_scene.h"
+#include "prt/transfer.h"
+
+namespace prtsub {
+
+//! A pinhole camera; fov is the full vertical angle in degrees.
+struct Camera {
+  Eigen::Vector3d eye = Eigen::Vector3d(0, 0, 5), target = Eigen::Vector3d::Zero(), up = Eigen::Vector3d::UnitY();
+  double fov_deg = 40;
+};
+
+//! Parses eye=X,Y,Z:target=X,Y,Z:up=X,Y,Z:fov=DEG (up and fov optional). \throw InputError
+Camera parse_camera(const std::string& spec);
+
+//! A three-quarter view that frames the whole bounding box. The up axis is +z when the box is
+//! much flatter in z than in x and y (a z-up site), else +y.
+Camera auto_camera(const Bounds& bounds, int width, int height);
+
+//! Unit direction of the primary ray through the centre of pixel (column c, row r from the top).
+Eigen::Vector3d camera_ray(const Camera& camera, int c, int r, int width, int height);
+
+//! What each pixel's primary ray hit: a face (or -1) and Embree's barycentrics (u, v), the
+//! hit being (1−u−v)·v0 + u·v1 + v·v2.
+struct SurfaceHits {
+  int width = 0, height = 0;
+  std::vector<int32_t> face;
+  std::vector<float> u, v;
+  size_t covered() const;
+};
+
+SurfaceHits trace_primary(const RayScene& scene, const Camera& camera, int width, int height, int threads = 0);
+
+//! Exit radiance per vertex and channel, (albedo/π) Σ_i l_i t_i: #V by 3.
+//! \pre light.order == order of transfer (or lower: missing coefficients are 0)
+RowMatrixX3d vertex_radiance(const RowMatrixXd& transfer, const ShLight& light, double albedo);
+
+//! Gouraud frame: radiance interpolated barycentrically from the hit face's vertices. RGBA,
+//! alpha 1 where a face was hit and 0 elsewhere.
+Image shade_gouraud(const SurfaceHits& hits, const std::vector<Triangle>& triangles, const RowMatrixX3d& radiance);
+
+//! The point transfer is estimated from for barycentrics (u, v) of triangle t: the flat point
+//! lifted towards the smooth surface its vertex normals describe (on convex patches only).
+Eigen::Vector3d shading_point(const RowMatrixX3d& positions, const RowMatrixX3d& normals, const Triangle& t, double u,
+                              double v);
+
+//! Shading points (see shading_point) and interpolated shading normals of covered pixels, in
+//! pixel order.
+void hit_points(const SurfaceHits& hits, const RowMatrixX3d& positions, const RowMatrixX3d& normals,
+                const std::vector<Triangle>& triangles, RowMatrixX3d& points, RowMatrixX3d& point_normals);
+
+//! The per-pixel reference: transfer computed at each hit point with `options`, then shaded.
+Image render_reference(const RayScene& scene, const SurfaceHits& hits, const RowMatrixX3d& positions,
+                       const RowMatrixX3d& normals, const std::vector<Triangle>& triangles, const ShLight& light,
+                       double albedo, const TransferOptions& options, TransferStats* stats = nullptr,
+                       const ProgressFn& progress = {});
+
+//! Error of image a against reference b over pixels covered in both (alpha > 0).
+struct ImageError {
+  double rmse_relative = 0;  //!< RMSE over covered pixels and RGB, divided by b's mean there
+  double psnr_db = 0;        //!< 20 log10(max of b / RMSE); infinite for identical images
+  size_t pixels = 0;
+};
+//! \param heat if not null, receives a false-colour map of per-pixel relative error (0 black,
+//!        4× the RMSE or more yellow; uncovered pixels grey)
+//! \throw InputError if the sizes differ or nothing is covered in both
+ImageError image_error(const Image& a, const Image& b, Image* heat = nullptr);
+
+}  // namespace prtsub
