@@ -109,3 +109,51 @@ TEST_F(Cli, BundledExampleBakes) {
 
 }  // namespace
 }  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+TEST_F(Cli, RenderAndDiffProduceFramesAndNumbers) {
+  std::string in = scene(), asset = dir.path("a.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "16"}), 0);
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "--light-rotate", "x,30", "-o", dir.path("g.exr"), "--size", "64,48"}), 0);
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "--light-rotate", "x,30", "-o", dir.path("r.exr"), "--size", "64,48",
+                 "--reference", "--rays", "64", "--compare-bare", "--report", dir.path("r.json")}),
+            0);
+  EXPECT_EQ(run({"render", asset, "--light", "random:4", "-o", dir.path("g.png"), "--size", "64,48", "--exposure", "2",
+                 "--camera", "eye=4,3,5:target=0,0,0:up=0,1,0:fov=35"}),
+            0);
+  EXPECT_EQ(run({"diff", dir.path("g.exr"), dir.path("r.exr"), "-o", dir.path("heat.png"), "--report", dir.path("d.json")}), 0);
+  testing::internal::GetCapturedStdout();
+  for (const char* f : {"g.exr", "r.exr", "g.png", "heat.png"}) EXPECT_TRUE(test::file_exists(dir.path(f))) << f;
+  std::string rj = read_file_bytes(dir.path("r.json")), dj = read_file_bytes(dir.path("d.json"));
+  EXPECT_NE(rj.find("\"reference_rays_per_second\""), std::string::npos);
+  EXPECT_NE(rj.find("\"bare_rays_per_second\""), std::string::npos);
+  EXPECT_NE(dj.find("\"rmse_percent\""), std::string::npos);
+  EXPECT_NE(dj.find("\"psnr_db\""), std::string::npos);
+}
+
+TEST_F(Cli, RenderRejectsBadLightsCamerasAndSizesWithoutOutput) {
+  std::string in = scene(), asset = dir.path("a.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "4"}), 0);
+  testing::internal::GetCapturedStdout();
+  const size_t before = files();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"render", asset, "--light", "moon:1", "-o", dir.path("f.exr")}), 1);
+  EXPECT_EQ(run({"render", asset, "--light", "env:" + dir.path("nope.exr"), "-o", dir.path("f.exr")}), 1);
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "--camera", "eye=1,1,1", "-o", dir.path("f.exr")}), 1);
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "--size", "0,10", "-o", dir.path("f.exr")}), 2);
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "-o", dir.path("f.tga")}), 1);
+  EXPECT_EQ(run({"render", asset, "-o", dir.path("f.exr")}), 2);
+  EXPECT_EQ(run({"render", in, "--light", "sky", "-o", dir.path("f.exr")}), 1);  // a mesh, not an asset
+  EXPECT_EQ(run({"diff", asset, dir.path("missing.exr")}), 1);
+  std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("moon"), std::string::npos);
+  EXPECT_NE(err.find("--size"), std::string::npos);
+  EXPECT_EQ(files(), before);
+}
+
+}  // namespace
+}  // namespace prtsub

@@ -2,7 +2,10 @@
 // tests skip and say so. CI has ../shared beside the checkout, and there they run.
 #include <gtest/gtest.h>
 
+#include "cli/commands.h"
 #include "helpers.h"
+#include "prt/asset.h"
+#include "subdiv/ply.h"
 #include "prt/transfer.h"
 #include "subdiv/mesh_io.h"
 
@@ -46,6 +49,34 @@ TEST_P(Scenes, LoadsWithTheDocumentedCounts) {
   }
   EXPECT_TRUE(m.normals.allFinite());
   EXPECT_GE(m.num_vertices(), static_cast<size_t>(m.positions.rows()));
+}
+
+int run(std::vector<std::string> args) {
+  args.insert(args.begin(), "prtsub");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  testing::internal::CaptureStdout();
+  int rc = run_cli(static_cast<int>(argv.size()), argv.data());
+  testing::internal::GetCapturedStdout();
+  return rc;
+}
+
+TEST_P(Scenes, BakesAndRendersWithTheAutoCamera) {
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  test::TempDir tmp;
+  const std::string asset = tmp.path("a.ply"), frame = tmp.path("f.exr"), rep = tmp.path("r.json");
+  ASSERT_EQ(run({"bake", dir + "/" + GetParam().file, "-o", asset, "--rays", "4", "--order", "3"}), 0);
+  ASSERT_EQ(run({"render", asset, "--light", "sky", "--light", "sun:1,3,2", "-o", frame, "--size", "160,120", "--camera",
+                 "auto", "--report", rep}),
+            0);
+  // The auto camera frames the asset: it covers a good part of the frame but not all of it.
+  const std::string json = read_file_bytes(rep);
+  const size_t at = json.find("\"pixels_covered\": ");
+  ASSERT_NE(at, std::string::npos);
+  const long covered = std::stol(json.substr(at + 18));
+  EXPECT_GT(covered, 160 * 120 / 20) << GetParam().file;
+  EXPECT_LE(covered, 160 * 120);
 }
 
 INSTANTIATE_TEST_SUITE_P(Shared, Scenes, ::testing::ValuesIn(kScenes), [](const auto& param_info) {
