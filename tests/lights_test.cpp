@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "helpers.h"
+#include "prt/image_io.h"
 #include "prt/sh.h"
 #include "subdiv/exceptions.h"
 
@@ -137,6 +138,19 @@ TEST(Lights, EnvironmentMapsUseExactSolidAnglesAndTheDocumentedMapping) {
   EXPECT_NEAR(latlong_direction(0.3, 0).y(), 1.0, 1e-12);
   EXPECT_NEAR(latlong_direction(0, 0.5).x(), 1.0, 1e-12);
   EXPECT_NEAR(latlong_direction(0.25, 0.5).z(), -1.0, 1e-12);
+}
+
+TEST(Lights, EnvSpecReadsAnExrFromDisk) {
+  test::TempDir dir;
+  Image img = latlong(32, 16, [](const Eigen::Vector3d& w) { return Eigen::Vector3d(1 + w.y(), 0.5, 2 + w.x()); });
+  write_image(dir.path("env.exr"), img);
+  ShLight from_file = parse_light("env:" + dir.path("env.exr"), 3);
+  ShLight direct = environment_light(3, img);
+  EXPECT_LT((from_file.coeffs - direct.coeffs).cwiseAbs().maxCoeff(), 1e-12);  // EXR float is lossless
+  // The +y gradient in band 1. The test map holds each texel's centre value, which misses the
+  // texel's mean by about (π/H)²/24 relative (midpoint rule): allow twice that.
+  const double expect = std::sqrt(4 * M_PI / 3), h = M_PI / 16;
+  EXPECT_NEAR(from_file.coeffs(1, 0), expect, 2 * expect * h * h / 24);
 }
 
 TEST(Lights, SpecsParseAndBadSpecsNameThemselves) {
