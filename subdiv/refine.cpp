@@ -1,0 +1,348 @@
+// Budgeted adaptive refinement by longest-edge bisection.
+//
+// Topology is kept over positions: a map from each position edge to the faces that use it
+// (up to two; more marks the edge non-manifold and it is never split). Splitting an edge
+// inserts one position at its midpoint and splits every face on it, so the mesh is conforming
+// after every split: an interior edge adds two triangles, a boundary edge one. Each face
+// sees the edge through its own render vertices: faces across a smooth edge share their
+// corners and so share the new render vertex; across a crease each side gets its own at the
+// same position, interpolated from its own corners.
+//
+// Faces wait in an indexed max-heap keyed by (sum of their edges' errors, area), ties by id.
+// A popped face is refined along its longest-edge propagation path (Rivara): walk to the
+// neighbour across the longest edge while that neighbour has a longer one, split the terminal
+// edge (the longest of both its faces), and repeat until the popped face itself is split.
+// Lengths are compared as (length, edge key), a total order, so every walk terminates, and
+// longest-edge bisection keeps every angle above half the smallest input angle.
+//
+// Work comes in batches: pop `batch` faces and split them with provisional values (linear
+// interpolation), then ask the signal for the new vertices' true values all at once (Embree
+// traces them in parallel), then key the new faces. Results depend on the batch size but not
+// on threads. The budget is exact except where parity forbids it: a closed surface has
+// 3F = 2E, so F is even, and with no boundary edge left to split an odd budget stops one
+// short (reported as a warning).
+#include "subdiv/refine.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "subdiv/indexed_heap.h"
+
+namespace prtsub {
+namespace {
+
+using Key = std::pair<double, double>;  // (error, area)
+
+inline uint64_t edge_key(uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
+
+struct EdgeFaces {
+  uint32_t f[2] = {UINT32_MAX, UINT32_MAX};
+  uint32_t count = 0;  // > 2: non-manifold
+};
+
+class Refiner {
+ public:
+  Refiner(Mesh& mesh, RowMatrixXd& values, RowMatrixXd* attributes, RefinementSignal& signal)
+      : mesh_(mesh), values_out_(values), attr_out_(attributes), signal_(signal) {
+    K_ = static_cast<int>(values.cols());
+    A_ = attributes ? static_cast<int>(attributes->cols()) : 0;
+    for (Eigen::Index i = 0; i < mesh.positions.rows(); ++i) pos_.push_back(mesh.positions.row(i).transpose());
+    vpos_ = mesh.vertex_position;
+    for (Eigen::Index i = 0; i < mesh.normals.rows(); ++i) nrm_.push_back(mesh.normals.row(i).transpose());
+    val_.assign(values.data(), values.data() + values.size());
+    if (A_) attr_.assign(attributes->data(), attributes->data() + attributes->size());
+    tri_ = mesh.triangles;
+    src_ = mesh.source_face;
+    for (uint32_t f = 0; f < tri_.size(); ++f)
+      for (int k = 0; k < 3; ++k) add_face(edge_key(pos_of(f, k), pos_of(f, k + 1)), f);
+  }
+
+  size_t non_manifold_edges() const {
+    size_t n = 0;
+    for (const auto& [k, e] : edges_) n += e.count > 2;
+    return n;
+  }
+  size_t faces() const { return tri_.size(); }
+
+  // Runs batches until the budget is met or nothing is left to split. `key_of` gives a face's
+  // key, or nullopt-like (first < 0) when it should not be split.
+  template <class KeyFn>
+  void run(size_t budget, size_t batch, KeyFn&& key_of, RefineStats& stats) {
+    IndexedHeap<Key> heap;
+    for (uint32_t f = 0; f < tri_.size(); ++f) {
+      Key k = key_of(f);
+      if (k.first >= 0) heap.push(f, k);
+    }
+    heap_ = &heap;
+    while (tri_.size() < budget && !heap.empty()) {
+      pending_.clear();
+      dirty_.clear();
+      for (size_t i = 0; i < batch && tri_.size() < budget && !heap.empty(); ++i) {
+        uint32_t t = heap.pop();
+        if (!lepp(t, budget, stats)) {
+          // The split needs two triangles and one is left: end on a boundary split if any.
+          heap.push(t, key_of(t));
+          if (!split_best_boundary(heap, stats)) {
+            stats.warning = "budget " + std::to_string(budget) + " is odd but no boundary edge is left to split (a closed "
+                            "surface has an even triangle count): stopped at " + std::to_string(tri_.size());
+          }
+          break;
+        }
+      }
+      finish_batch(stats);
+      for (uint32_t f : dirty_) {
+        Key k = key_of(f);
+        if (k.first >= 0) heap.push(f, k); else heap.remove(f);
+      }
+      if (!stats.warning.empty()) break;
+    }
+    heap_ = nullptr;
+  }
+
+  Key error_key(uint32_t f) const {
+    double e = 0;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = tri_[f][k], b = tri_[f][(k + 1) % 3];
+      if (edges_.at(edge_key(vpos_[a], vpos_[b])).count > 2) continue;  // never split: no say
+      EdgeView v{pos_[vpos_[a]], pos_[vpos_[b]], nrm_[a], nrm_[b], &val_[size_t(a) * K_], &val_[size_t(b) * K_], K_};
+      e += signal_.edge_error(v);
+    }
+    if (longest_edge(f) < 0) return {-1, 0};
+    return {e, area(f)};
+  }
+
+  Key length_key(uint32_t f, double max_edge) const {
+    int k = longest_edge(f);
+    if (k < 0) return {-1, 0};
+    double len = (pos_[pos_of(f, k)] - pos_[pos_of(f, k + 1)]).norm();
+    return len > max_edge ? Key{len, 0} : Key{-1, 0};
+  }
+
+  void write_back() {
+    mesh_.positions.resize(static_cast<Eigen::Index>(pos_.size()), 3);
+    for (size_t i = 0; i < pos_.size(); ++i) mesh_.positions.row(static_cast<Eigen::Index>(i)) = pos_[i].transpose();
+    mesh_.vertex_position = vpos_;
+    mesh_.normals.resize(static_cast<Eigen::Index>(nrm_.size()), 3);
+    for (size_t i = 0; i < nrm_.size(); ++i) mesh_.normals.row(static_cast<Eigen::Index>(i)) = nrm_[i].transpose();
+    mesh_.triangles = tri_;
+    mesh_.source_face = src_;
+    values_out_ = Eigen::Map<RowMatrixXd>(val_.data(), static_cast<Eigen::Index>(vpos_.size()), K_);
+    if (attr_out_) *attr_out_ = Eigen::Map<RowMatrixXd>(attr_.data(), static_cast<Eigen::Index>(vpos_.size()), A_);
+  }
+
+ private:
+  uint32_t pos_of(uint32_t f, int k) const { return vpos_[tri_[f][k % 3]]; }
+  double area(uint32_t f) const {
+    return 0.5 * (pos_[pos_of(f, 1)] - pos_[pos_of(f, 0)]).cross(pos_[pos_of(f, 2)] - pos_[pos_of(f, 0)]).norm();
+  }
+
+  void add_face(uint64_t e, uint32_t f) {
+    EdgeFaces& ef = edges_[e];
+    if (ef.count < 2) ef.f[ef.count] = f;
+    ++ef.count;
+  }
+  void replace_face(uint64_t e, uint32_t from, uint32_t to) {
+    EdgeFaces& ef = edges_.at(e);
+    for (uint32_t& x : ef.f)
+      if (x == from) x = to;
+  }
+
+  // Corner k whose edge (k, k+1) is the face's longest splittable edge in the total order
+  // (length, key), or -1 when all three edges are non-manifold.
+  int longest_edge(uint32_t f) const {
+    int best = -1;
+    double best_len = -1;
+    uint64_t best_key = 0;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = pos_of(f, k), b = pos_of(f, k + 1);
+      uint64_t key = edge_key(a, b);
+      if (edges_.at(key).count > 2) continue;
+      double len = (pos_[a] - pos_[b]).squaredNorm();
+      if (len > best_len || (len == best_len && key > best_key)) best = k, best_len = len, best_key = key;
+    }
+    return best;
+  }
+
+  // Refines along the longest-edge path from t until t is split. Returns false if the next
+  // split would exceed the budget.
+  bool lepp(uint32_t t, size_t budget, RefineStats& stats) {
+    for (;;) {
+      if (tri_.size() >= budget) return true;  // the path may end the budget before t splits
+      uint32_t cur = t;
+      for (;;) {
+        int k = longest_edge(cur);
+        if (k < 0) return true;  // nothing splittable: t is done with
+        uint64_t e = edge_key(pos_of(cur, k), pos_of(cur, k + 1));
+        const EdgeFaces& ef = edges_.at(e);
+        if (ef.count == 2) {
+          uint32_t other = ef.f[0] == cur ? ef.f[1] : ef.f[0];
+          int k2 = longest_edge(other);
+          if (edge_key(pos_of(other, k2), pos_of(other, k2 + 1)) != e) {
+            cur = other;  // the neighbour has a longer edge: refine there first
+            continue;
+          }
+        }
+        if (tri_.size() + ef.count > budget) return false;
+        bool hit_t = ef.f[0] == t || ef.f[1] == t;
+        split(e, stats);
+        if (hit_t) return true;
+        break;
+      }
+    }
+  }
+
+  // With one triangle left in the budget: split the longest boundary edge of the highest-
+  // ranked face that has one.
+  bool split_best_boundary(IndexedHeap<Key>& heap, RefineStats& stats) {
+    uint32_t best = UINT32_MAX;
+    uint64_t best_edge = 0;
+    for (uint32_t f = 0; f < tri_.size(); ++f) {
+      if (!heap.contains(f)) continue;
+      double best_len = -1;
+      uint64_t edge = 0;
+      for (int k = 0; k < 3; ++k) {
+        uint64_t e = edge_key(pos_of(f, k), pos_of(f, k + 1));
+        if (edges_.at(e).count != 1) continue;
+        double len = (pos_[pos_of(f, k)] - pos_[pos_of(f, k + 1)]).squaredNorm();
+        if (len > best_len) best_len = len, edge = e;
+      }
+      if (best_len < 0) continue;
+      if (best == UINT32_MAX || heap.key(f) > heap.key(best) || (!(heap.key(best) > heap.key(f)) && f < best))
+        best = f, best_edge = edge;
+    }
+    if (best == UINT32_MAX) return false;
+    split(best_edge, stats);
+    return true;
+  }
+
+  void split(uint64_t e, RefineStats& stats) {
+    EdgeFaces ef = edges_.at(e);
+    const uint32_t p = static_cast<uint32_t>(e >> 32), q = static_cast<uint32_t>(e & 0xFFFFFFFFu);
+    const uint32_t m = static_cast<uint32_t>(pos_.size());
+    pos_.push_back(0.5 * (pos_[p] + pos_[q]));
+    edges_.erase(e);
+    std::pair<uint64_t, uint32_t> made[2];  // (render pair, new render vertex) of this split
+    int n_made = 0;
+    for (uint32_t s = 0; s < ef.count; ++s) {
+      const uint32_t f = ef.f[s];
+      int k = 0;
+      while (edge_key(pos_of(f, k), pos_of(f, k + 1)) != e) ++k;
+      const uint32_t a = tri_[f][k], b = tri_[f][(k + 1) % 3], c = tri_[f][(k + 2) % 3];
+      const uint64_t pair = edge_key(a, b);
+      uint32_t mv = UINT32_MAX;
+      for (int i = 0; i < n_made; ++i)
+        if (made[i].first == pair) mv = made[i].second;
+      if (mv == UINT32_MAX) {
+        mv = new_vertex(m, a, b, f);
+        made[n_made++] = {pair, mv};
+      }
+      const uint32_t g = static_cast<uint32_t>(tri_.size());
+      Triangle tf = tri_[f], tg;
+      tf[(k + 1) % 3] = mv;  // f = (a, mv, c) in f's own corner order
+      tg[k] = mv, tg[(k + 1) % 3] = b, tg[(k + 2) % 3] = c;  // g = (mv, b, c)
+      tri_[f] = tf;
+      tri_.push_back(tg);
+      src_.push_back(src_[f]);
+      const uint32_t pa = vpos_[a], pb = vpos_[b], pc = vpos_[c];
+      add_face(edge_key(pa, m), f);
+      add_face(edge_key(m, pb), g);
+      add_face(edge_key(m, pc), f);
+      add_face(edge_key(m, pc), g);
+      replace_face(edge_key(pb, pc), f, g);
+      if (heap_) heap_->remove(f);
+      dirty_.push_back(f);
+      dirty_.push_back(g);
+    }
+    ++stats.splits;
+    if (ef.count == 1) ++stats.boundary_splits;
+  }
+
+  uint32_t new_vertex(uint32_t position, uint32_t a, uint32_t b, uint32_t face) {
+    const uint32_t v = static_cast<uint32_t>(vpos_.size());
+    vpos_.push_back(position);
+    Eigen::Vector3d n = nrm_[a] + nrm_[b];
+    if (!(n.norm() > 1e-12)) {  // opposite normals: take the face's
+      n = (pos_[pos_of(face, 1)] - pos_[pos_of(face, 0)]).cross(pos_[pos_of(face, 2)] - pos_[pos_of(face, 0)]);
+      if (!(n.norm() > 0)) n = nrm_[a];
+    }
+    nrm_.push_back(n.normalized());
+    for (int i = 0; i < K_; ++i) val_.push_back(0.5 * (val_[size_t(a) * K_ + i] + val_[size_t(b) * K_ + i]));
+    for (int i = 0; i < A_; ++i) attr_.push_back(0.5 * (attr_[size_t(a) * A_ + i] + attr_[size_t(b) * A_ + i]));
+    pending_.push_back({v, a, b, pos_[position], nrm_.back()});
+    return v;
+  }
+
+  void finish_batch(RefineStats& stats) {
+    if (pending_.empty()) return;
+    auto t0 = std::chrono::steady_clock::now();
+    RowMatrixXd parent(static_cast<Eigen::Index>(pending_.size()), K_), out(static_cast<Eigen::Index>(pending_.size()), K_);
+    for (size_t i = 0; i < pending_.size(); ++i)
+      for (int c = 0; c < K_; ++c) parent(static_cast<Eigen::Index>(i), c) = val_[size_t(pending_[i].index) * K_ + c];
+    signal_.compute_values(pending_, parent, out);
+    for (size_t i = 0; i < pending_.size(); ++i)
+      for (int c = 0; c < K_; ++c) val_[size_t(pending_[i].index) * K_ + c] = out(static_cast<Eigen::Index>(i), c);
+    stats.seconds_signal += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats.new_vertices += pending_.size();
+    ++stats.batches;
+    std::sort(dirty_.begin(), dirty_.end());
+    dirty_.erase(std::unique(dirty_.begin(), dirty_.end()), dirty_.end());
+  }
+
+  Mesh& mesh_;
+  RowMatrixXd& values_out_;
+  RowMatrixXd* attr_out_;
+  RefinementSignal& signal_;
+  int K_ = 0, A_ = 0;
+  std::vector<Eigen::Vector3d> pos_, nrm_;
+  std::vector<uint32_t> vpos_, src_;
+  std::vector<double> val_, attr_;
+  std::vector<Triangle> tri_;
+  std::unordered_map<uint64_t, EdgeFaces> edges_;
+  std::vector<NewVertex> pending_;
+  std::vector<uint32_t> dirty_;
+  IndexedHeap<Key>* heap_ = nullptr;
+};
+
+}  // namespace
+
+double min_angle_deg(const Mesh& mesh) {
+  double best = 180;
+  for (const Triangle& t : mesh.triangles) {
+    Eigen::Vector3d p[3] = {mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2])};
+    if (!((p[1] - p[0]).cross(p[2] - p[0]).norm() > 0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
+      best = std::min(best, std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0)) * 180 / M_PI);
+    }
+  }
+  return best;
+}
+
+RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& signal, const RefineOptions& options,
+                            RowMatrixXd* attributes) {
+  auto t0 = std::chrono::steady_clock::now();
+  RefineStats stats;
+  stats.min_angle_before_deg = min_angle_deg(mesh);
+  if (options.budget <= mesh.num_faces()) {
+    stats.warning = "budget " + std::to_string(options.budget) + " is not above the input's " +
+                    std::to_string(mesh.num_faces()) + " triangles: mesh left as it is";
+    stats.min_angle_after_deg = stats.min_angle_before_deg;
+    return stats;
+  }
+  Refiner r(mesh, values, attributes, signal);
+  stats.non_manifold_edges_kept = r.non_manifold_edges();
+  const size_t batch = std::max<size_t>(options.batch, 1);
+  if (options.max_edge > 0) {
+    r.run(options.budget, batch, [&](uint32_t f) { return r.length_key(f, options.max_edge); }, stats);
+    stats.pre_refinement_splits = stats.splits;
+  }
+  if (stats.warning.empty()) r.run(options.budget, batch, [&](uint32_t f) { return r.error_key(f); }, stats);
+  r.write_back();
+  stats.min_angle_after_deg = min_angle_deg(mesh);
+  stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,70 @@
+// Adaptive refinement of a mesh to an exact triangle budget, driven by per-edge error
+// estimates of a vertex signal. The signal (transfer, in prtsub) is behind an interface, so
+// this room needs neither Embree nor SH and is tested with synthetic signals.
+#pragma once
+
+#include <string>
+
+#include "subdiv/mesh.h"
+
+namespace prtsub {
+
+//! One side of an edge, as a face sees it: its two render vertices with their data.
+struct EdgeView {
+  Eigen::Vector3d pa, pb, na, nb;  //!< positions and unit normals
+  const double* va;                //!< signal of vertex a (K values)
+  const double* vb;
+  int K;
+};
+
+//! A vertex the refinement created: the midpoint of render vertices a and b.
+struct NewVertex {
+  uint32_t index;                  //!< its render-vertex index
+  uint32_t a, b;                   //!< parents
+  Eigen::Vector3d position, normal;
+};
+
+//! What refinement asks of the signal.
+class RefinementSignal {
+ public:
+  virtual ~RefinementSignal() = default;
+  //! Error estimate of an edge; larger is worse; must be finite and >= 0.
+  virtual double edge_error(const EdgeView& edge) const = 0;
+  //! Fills one row of `values` (#batch by K, row-major) per new vertex. Called once per batch
+  //! with every vertex the batch created; `parent_values` holds their linear interpolation.
+  virtual void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd& parent_values,
+                              RowMatrixXd& values) = 0;
+};
+
+struct RefineOptions {
+  size_t budget = 0;       //!< output triangle count
+  size_t batch = 256;      //!< faces popped before the signal is asked for new values
+  double max_edge = 0;     //!< > 0: first split every edge longer than this (within the budget)
+};
+
+struct RefineStats {
+  size_t splits = 0, boundary_splits = 0, new_vertices = 0, batches = 0;
+  size_t pre_refinement_splits = 0;
+  size_t non_manifold_edges_kept = 0;  //!< never split
+  double min_angle_before_deg = 0, min_angle_after_deg = 0;
+  double seconds_signal = 0, seconds_total = 0;
+  std::string warning;  //!< non-empty when the budget could not be met exactly, and why
+};
+
+//! Refines `mesh` (and the #V by K `values` of its render vertices) towards `options.budget`
+//! triangles. Faces are popped by the sum of their edges' errors; each is split by longest-
+//! edge bisection (Rivara's LEPP), which splits an edge in every face that has it, so the mesh
+//! stays conforming across creases, boundaries and welded parts, and angles never fall below
+//! half the smallest input angle. New vertices lie at edge midpoints; normals (per crease
+//! side) are interpolated and renormalised, `attributes` (#V by A, e.g. UVs) interpolated
+//! linearly, and every face keeps its source_face. Non-manifold edges are never split.
+//! A budget at or below the input's count leaves the mesh as it is (with a warning). Closed
+//! surfaces only hold even triangle counts (3F = 2E); an odd budget on one yields budget − 1.
+//! \param attributes may be null
+RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& signal, const RefineOptions& options,
+                            RowMatrixXd* attributes = nullptr);
+
+//! Smallest corner angle over faces of non-zero area, in degrees.
+double min_angle_deg(const Mesh& mesh);
+
+}  // namespace prtsub

@@ -1,0 +1,267 @@
+#include "subdiv/refine.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "helpers.h"
+#include "subdiv/indexed_heap.h"
+
+namespace prtsub {
+namespace {
+
+// A scalar signal: a sharp step across the plane x = x0 (a "shadow boundary"), evaluated at
+// positions. Records every vertex refinement creates.
+struct StepSignal : RefinementSignal {
+  double x0 = 0.3, width = 0.02;
+  std::vector<NewVertex> created;
+  double at(const Eigen::Vector3d& p) const { return 1 / (1 + std::exp(-(p.x() - x0) / width)); }
+  double edge_error(const EdgeView& e) const override { return std::abs(e.va[0] - e.vb[0]); }
+  void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd&, RowMatrixXd& values) override {
+    for (size_t i = 0; i < batch.size(); ++i) values(static_cast<Eigen::Index>(i), 0) = at(batch[i].position);
+    created.insert(created.end(), batch.begin(), batch.end());
+  }
+  RowMatrixXd initial(const Mesh& m) const {
+    RowMatrixXd v(static_cast<Eigen::Index>(m.num_vertices()), 1);
+    for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = at(m.point(i));
+    return v;
+  }
+};
+
+double total_area(const Mesh& m) {
+  double a = 0;
+  for (const Triangle& t : m.triangles) a += triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+  return a;
+}
+
+EdgeCounts position_edges(const Mesh& m) {
+  std::vector<Triangle> t(m.triangles.size());
+  for (size_t f = 0; f < t.size(); ++f)
+    for (int k = 0; k < 3; ++k) t[f][k] = m.vertex_position[m.triangles[f][k]];
+  return count_edges(t);
+}
+
+// A flat grid of n×n unit squares in z = 0, each split along its diagonal: boundary, right angles.
+RawMesh grid(int n) {
+  RawMesh g;
+  g.positions.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) g.positions.row(j * (n + 1) + i) << double(i) / n, double(j) / n, 0;
+  g.face_offsets.push_back(0);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      for (int v : {a, b, c}) g.face_indices.push_back(v);
+      g.face_offsets.push_back(g.face_indices.size());
+      for (int v : {a, c, d}) g.face_indices.push_back(v);
+      g.face_offsets.push_back(g.face_indices.size());
+    }
+  return g;
+}
+
+TEST(IndexedHeap, PopsByKeyThenIdAndSupportsUpdateAndRemove) {
+  IndexedHeap<std::pair<double, double>> h;
+  h.push(3, {1, 0});
+  h.push(1, {5, 0});
+  h.push(7, {5, 0});
+  h.push(2, {0, 9});
+  h.push(3, {6, 0});  // update up
+  h.push(1, {-1, 0});  // update down
+  h.remove(7);
+  h.remove(42);  // absent: no-op
+  std::vector<uint32_t> order;
+  while (!h.empty()) order.push_back(h.pop());
+  EXPECT_EQ(order, (std::vector<uint32_t>{3, 2, 1}));
+}
+
+TEST(Refine, ClosedMeshStaysConformingWithExactBudgetAndArea) {
+  Mesh m = test::build(test::icosphere(1));
+  StepSignal s;
+  RowMatrixXd v = s.initial(m);
+  const double area = total_area(m);
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{1000, 16, 0});
+  EXPECT_TRUE(st.warning.empty()) << st.warning;
+  EXPECT_EQ(m.num_faces(), 1000u);
+  EdgeCounts e = position_edges(m);
+  EXPECT_EQ(e.boundary, 0u);  // a T-junction would open boundary edges
+  EXPECT_EQ(e.non_manifold, 0u);
+  EXPECT_EQ(e.winding_conflicts, 0u);  // orientation kept
+  EXPECT_EQ(static_cast<long>(m.positions.rows()) - static_cast<long>(e.edges) + static_cast<long>(m.num_faces()), 2);
+  EXPECT_NEAR(total_area(m), area, 1e-12 * area);
+  // Every new vertex is the midpoint of its parents and carries the signal's value.
+  ASSERT_EQ(st.new_vertices, s.created.size());
+  for (const NewVertex& nv : s.created) {
+    EXPECT_LT((nv.position - 0.5 * (m.point(nv.a) + m.point(nv.b))).norm(), 1e-15);
+    EXPECT_EQ(v(nv.index, 0), s.at(nv.position));
+  }
+  EXPECT_EQ(v.rows(), static_cast<Eigen::Index>(m.num_vertices()));
+  EXPECT_GE(st.min_angle_after_deg, 0.5 * st.min_angle_before_deg);
+}
+
+TEST(Refine, RefinesWhereTheSignalChanges) {
+  Mesh m = test::build(grid(8));
+  StepSignal s;
+  RowMatrixXd v = s.initial(m);
+  refine_adaptive(m, v, s, RefineOptions{600, 8, 0});
+  size_t near = 0;
+  for (const NewVertex& nv : s.created) near += std::abs(nv.position.x() - s.x0) < 0.15;
+  EXPECT_GT(near, s.created.size() * 8 / 10) << near << " of " << s.created.size();
+}
+
+TEST(Refine, BudgetParityAndTrivialBudgets) {
+  StepSignal s;
+  {  // below the input: unchanged, with a warning
+    Mesh m = test::build(test::icosphere(1));
+    RowMatrixXd v = s.initial(m);
+    RefineStats st = refine_adaptive(m, v, s, RefineOptions{50, 16, 0});
+    EXPECT_EQ(m.num_faces(), 80u);
+    EXPECT_FALSE(st.warning.empty());
+  }
+  {  // closed: odd budgets stop one short and say why; one interior split adds two
+    Mesh m = test::build(test::icosphere(1));
+    RowMatrixXd v = s.initial(m);
+    RefineStats st = refine_adaptive(m, v, s, RefineOptions{101, 16, 0});
+    EXPECT_EQ(m.num_faces(), 100u);
+    EXPECT_NE(st.warning.find("closed"), std::string::npos) << st.warning;
+    Mesh m2 = test::build(test::icosphere(1));
+    RowMatrixXd v2 = s.initial(m2);
+    refine_adaptive(m2, v2, s, RefineOptions{82, 16, 0});
+    EXPECT_EQ(m2.num_faces(), 82u);
+  }
+  for (size_t budget : {129u, 130u, 131u, 333u}) {  // with a boundary: exact, odd or even
+    Mesh m = test::build(grid(8));
+    RowMatrixXd v = s.initial(m);
+    RefineStats st = refine_adaptive(m, v, s, RefineOptions{budget, 4, 0});
+    EXPECT_EQ(m.num_faces(), budget);
+    EXPECT_TRUE(st.warning.empty()) << st.warning;
+    EdgeCounts e = position_edges(m);
+    EXPECT_EQ(e.boundary, 32u + st.boundary_splits);  // the outline gained only split halves
+  }
+}
+
+TEST(Refine, FacesWithoutErrorWaitForFacesWithError) {
+  // Signal 1 at one interior grid vertex, 0 elsewhere: only its faces have error.
+  RawMesh g = grid(6);
+  Mesh m = test::build(g);
+  struct Spike : RefinementSignal {
+    Eigen::Vector3d at = Eigen::Vector3d(0.5, 0.5, 0);
+    std::vector<NewVertex> created;
+    double edge_error(const EdgeView& e) const override { return std::abs(e.va[0] - e.vb[0]); }
+    void compute_values(const std::vector<NewVertex>& b, const RowMatrixXd& parents, RowMatrixXd& out) override {
+      out = parents;
+      created.insert(created.end(), b.begin(), b.end());
+    }
+  } s;
+  RowMatrixXd v(static_cast<Eigen::Index>(m.num_vertices()), 1);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = (m.point(i) - s.at).norm() < 1e-9 ? 1.0 : 0.0;
+  refine_adaptive(m, v, s, RefineOptions{m.num_faces() + 12, 1, 0});
+  for (const NewVertex& nv : s.created) EXPECT_LT((nv.position - s.at).norm(), 1.0 / 6 * 1.5) << nv.position.transpose();
+}
+
+TEST(Refine, CreasesKeepOneVertexPerSideAndNormalsStayExact) {
+  Mesh m = test::build(test::cube(), 60.0);  // every cube edge is a crease
+  StepSignal s;
+  s.x0 = 0.5, s.width = 0.2;
+  RowMatrixXd v = s.initial(m);
+  RowMatrixXd uv(static_cast<Eigen::Index>(m.num_vertices()), 2);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) uv.row(i) << m.point(i).x(), 2 * m.point(i).y() + 1;
+  refine_adaptive(m, v, s, RefineOptions{200, 8, 0}, &uv);
+  EXPECT_EQ(m.num_faces(), 200u);
+  EXPECT_EQ(position_edges(m).boundary, 0u);
+  // Normals stay the faces' axis-aligned normals; each face's corners agree with its normal.
+  for (const Triangle& t : m.triangles) {
+    Eigen::Vector3d fn = (m.point(t[1]) - m.point(t[0])).cross(m.point(t[2]) - m.point(t[0])).normalized();
+    for (uint32_t c : t) EXPECT_NEAR(fn.dot(m.normals.row(c)), 1.0, 1e-12);
+  }
+  // A position on a cube edge (two coordinates in {0,1}) has one render vertex per side.
+  std::map<uint32_t, int> per_position;
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) ++per_position[m.vertex_position[i]];
+  for (auto [p, n] : per_position) {
+    Eigen::Vector3d x = m.positions.row(p);
+    int on_faces = 0;
+    for (int c = 0; c < 3; ++c) on_faces += (x[c] == 0 || x[c] == 1);
+    if (on_faces >= 2) {
+      EXPECT_GE(n, on_faces) << x.transpose();
+    }
+  }
+  // Linear attributes are reproduced exactly by midpoint interpolation.
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) {
+    EXPECT_NEAR(uv(i, 0), m.point(i).x(), 1e-15);
+    EXPECT_NEAR(uv(i, 1), 2 * m.point(i).y() + 1, 1e-15);
+  }
+}
+
+TEST(Refine, NonManifoldEdgesAreNeverSplit) {
+  // Three triangles on the edge (0,0,0)-(1,0,0): a fin.
+  RawMesh fin;
+  fin.positions.resize(5, 3);
+  fin.positions << 0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, -1, 0, 0.5, 0, 1;
+  fin.face_indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  fin.face_offsets = {0, 3, 6, 9};
+  Mesh m = test::build(fin);
+  StepSignal s;
+  s.x0 = 0.5;
+  RowMatrixXd v = s.initial(m);
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{40, 4, 0});
+  EXPECT_EQ(st.non_manifold_edges_kept, 1u);
+  EXPECT_EQ(position_edges(m).non_manifold, 1u);
+  for (Eigen::Index p = 0; p < m.positions.rows(); ++p)
+    EXPECT_GT((m.positions.row(p) - Eigen::RowVector3d(0.5, 0, 0)).norm(), 1e-12) << "the fin edge was split";
+  EXPECT_GT(m.num_faces(), 3u);
+}
+
+TEST(Refine, SliversDegenerateFacesAndAllCreaseTrianglesAreHandled) {
+  // A sliver with a 0.001° angle next to a normal triangle, plus a zero-area face.
+  RawMesh r;
+  r.positions.resize(6, 3);
+  const double h = std::tan(0.001 * M_PI / 180);
+  r.positions << 0, 0, 0, 1, 0, 0, 1, h, 0, 0.5, -1, 0, 2, 0, 0, 3, 0, 0;
+  r.face_indices = {0, 1, 2, 1, 0, 3, 1, 4, 5};  // the last one is collinear
+  r.face_offsets = {0, 3, 6, 9};
+  Mesh m = test::build(r);
+  StepSignal s;
+  s.x0 = 0.7;
+  RowMatrixXd v = s.initial(m);
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{60, 4, 0});
+  EXPECT_EQ(m.num_faces(), 60u);
+  EXPECT_TRUE(v.allFinite());
+  EXPECT_TRUE(m.normals.allFinite());
+  EXPECT_GE(st.min_angle_after_deg, 0.5 * st.min_angle_before_deg);
+  // A tetrahedron with every edge a crease.
+  RawMesh tet;
+  tet.positions.resize(4, 3);
+  tet.positions << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  tet.face_indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  tet.face_offsets = {0, 3, 6, 9, 12};
+  Mesh t = test::build(tet, 30.0);
+  EXPECT_EQ(t.num_vertices(), 12u);
+  RowMatrixXd tv = s.initial(t);
+  refine_adaptive(t, tv, s, RefineOptions{40, 4, 0});
+  EXPECT_EQ(t.num_faces(), 40u);
+  EXPECT_EQ(position_edges(t).boundary, 0u);
+}
+
+TEST(Refine, SameInputSameOutput) {
+  auto run = [](size_t batch) {
+    Mesh m = test::build(test::icosphere(1));
+    StepSignal s;
+    RowMatrixXd v = s.initial(m);
+    refine_adaptive(m, v, s, RefineOptions{500, batch, 0});
+    return std::make_pair(m.triangles, v);
+  };
+  EXPECT_EQ(run(8), run(8));
+}
+
+TEST(Refine, MaxEdgePreRefinementBoundsEdgeLength) {
+  Mesh m = test::build(grid(2));
+  StepSignal s;
+  RowMatrixXd v = s.initial(m);
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{100000, 64, 0.2});
+  EXPECT_GT(st.pre_refinement_splits, 0u);
+  for (const Triangle& t : m.triangles)
+    for (int k = 0; k < 3; ++k) EXPECT_LE((m.point(t[k]) - m.point(t[(k + 1) % 3])).norm(), 0.2 + 1e-12);
+}
+
+}  // namespace
+}  // namespace prtsub
