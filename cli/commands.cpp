@@ -16,7 +16,9 @@
 #include "cli/args.h"
 #include "cli/progress.h"
 #include "cli/report.h"
+#include "cli/pipeline.h"
 #include "prt/asset.h"
+#include "prt/evaluate.h"
 #include "prt/image_io.h"
 #include "prt/lights.h"
 #include "prt/render.h"
@@ -77,13 +79,6 @@ void print_defects(const MeshDefects& d) {
               d.boundary_edges, d.welded_vertices, d.polygons_triangulated);
 }
 
-// Render-vertex positions, the points transfer is computed at.
-RowMatrixX3d vertex_points(const Mesh& mesh) {
-  RowMatrixX3d p(static_cast<Eigen::Index>(mesh.num_vertices()), 3);
-  for (size_t v = 0; v < mesh.num_vertices(); ++v) p.row(static_cast<Eigen::Index>(v)) = mesh.positions.row(mesh.vertex_position[v]);
-  return p;
-}
-
 struct CommonOptions {
   std::string input;
   std::string report;
@@ -103,43 +98,48 @@ void add_common(ArgParser& args, CommonOptions& c) {
 
 int cmd_bake(int argc, char** argv) {
   CommonOptions c;
-  std::string output;
-  ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset (binary PLY).");
+  BakeSettings b;
+  std::string output, estimate = "length", scheme = "linear";
+  int budget = 0;
+  ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset (binary PLY).\n"
+                         "With --refine, first refines the mesh: adaptively to a triangle budget where the transfer\n"
+                         "changes, or uniformly (OpenSubdiv) as a baseline.");
   add_common(args, c);
   args.option("--output", "ASSET.ply", "output asset (required)", &output);
   args.alias("-o", "--output");
+  args.option("--refine", "none|adaptive|uniform", "refinement [default none]", &b.refine);
+  args.option("--budget", "T", "adaptive: output triangle count", &budget, 0, 1 << 30);
+  args.option("--estimate", "relative|shadow|curvature|length", "adaptive: edge error estimate [default length]", &estimate);
+  args.option("--max-edge", "L", "adaptive: first split edges longer than L (0: off)", &b.max_edge, 0.0, 1e30);
+  int batch = 256;
+  args.option("--batch", "B", "adaptive: faces split per Embree batch", &batch, 1, 1 << 20);
+  args.option("--levels", "K", "uniform: 1→4 splits per face", &b.uniform.levels, 1, 8);
+  args.option("--scheme", "linear|loop", "uniform: linear keeps the surface; loop smooths it [default linear]", &scheme);
   if (!args.parse(argc, argv, 2)) return 0;
   if (output.empty()) throw UsageError("bake: missing -o ASSET.ply");
+  if (b.refine == "adaptive" && budget <= 0) throw UsageError("--budget: required with --refine adaptive");
+  b.input = c.input;
+  b.load = LoadOptions{c.crease_angle};
+  b.transfer = c.transfer;
+  b.budget = static_cast<size_t>(budget);
+  b.batch = static_cast<size_t>(batch);
+  b.estimate = parse_estimate(estimate);
+  b.uniform.scheme = parse_uniform_scheme(scheme);
+  b.uniform.crease_angle_deg = c.crease_angle;
   check_transfer_options(c.transfer);
   check_writable(output);
   if (!c.report.empty()) check_writable(c.report);
 
-  Stopwatch clock;
-  Mesh mesh = load_mesh(c.input, LoadOptions{c.crease_angle});
-  const double t_load = clock.lap();
-  RayScene scene(mesh.positions, position_triangles(mesh));
-  const double t_scene = clock.lap();
-
-  Progress progress("transfer", mesh.num_vertices(), stderr_is_terminal());
-  TransferStats stats;
-  RowMatrixXd transfer = shadowed_transfer(scene, vertex_points(mesh), mesh.normals, c.transfer, &stats,
-                                           [&](size_t n) { progress.add(n); });
+  Progress progress("transfer", 0, stderr_is_terminal());
+  BakeResult res = run_bake(b, [&](size_t n) { progress.add(n); });
   progress.finish();
-  const double t_transfer = clock.lap();
-
-  Metadata meta = sh_convention_metadata(c.transfer.order);
-  meta.push_back({"source", c.input});
-  meta.push_back({"rays", std::to_string(c.transfer.rays)});
-  meta.push_back({"seed", std::to_string(c.transfer.seed)});
-  meta.push_back({"threads", std::to_string(c.transfer.threads) + " (results do not depend on it)"});
-  meta.push_back({"crease_angle", std::to_string(c.crease_angle)});
-  meta.push_back({"normals", mesh.normals_from_file ? "file" : "computed"});
-  meta.push_back({"estimator", "cosine-lattice cross-fitted-control-variate"});
-  meta.push_back({"generator", std::string("prtsub ") + kVersion});
-  write_asset(output, mesh, transfer, meta);
-  const double t_write = clock.lap();
-  const double total = clock.total();
-  const double rays_per_second = static_cast<double>(stats.rays) / std::max(stats.seconds, 1e-9);
+  auto t_write0 = std::chrono::steady_clock::now();
+  write_asset(output, res.mesh, res.transfer, res.metadata);
+  const double t_write = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write0).count();
+  const double total = res.seconds_total + t_write;
+  const double transfer_seconds = res.seconds_transfer + res.refine.seconds_signal;
+  const double rays_per_second = static_cast<double>(res.rays) / std::max(transfer_seconds, 1e-9);
+  const Mesh& mesh = res.mesh;
 
   Report r;
   r.set("command", "bake");
@@ -149,20 +149,41 @@ int cmd_bake(int argc, char** argv) {
   r.set("rays_per_vertex", c.transfer.rays);
   r.set("seed", c.transfer.seed);
   r.set("crease_angle", c.crease_angle);
+  r.set("refine", b.refine);
   r.set("triangles_in", static_cast<uint64_t>(mesh.input_triangles));
   r.set("vertices_in", static_cast<uint64_t>(mesh.input_vertices));
   r.set("triangles_out", static_cast<uint64_t>(mesh.num_faces()));
   r.set("vertices_out", static_cast<uint64_t>(mesh.num_vertices()));
   r.set("positions_out", static_cast<uint64_t>(mesh.positions.rows()));
   r.set("normals_from_file", mesh.normals_from_file);
-  r.set("rays", stats.rays);
+  r.set("rays", res.rays);
   r.set("rays_per_second", rays_per_second);
   r.set("seconds_total", total);
-  r.set("seconds_load", t_load);
-  r.set("seconds_scene", t_scene);
-  r.set("seconds_transfer", t_transfer);
+  r.set("seconds_load", res.seconds_load);
+  r.set("seconds_scene", res.seconds_scene);
+  r.set("seconds_transfer", res.seconds_transfer);
+  r.set("seconds_refine", res.seconds_refine);
   r.set("seconds_write", t_write);
   r.set("peak_memory_mib", peak_memory_mib());
+  if (b.refine == "adaptive") {
+    const RefineStats& st = res.refine;
+    r.set("budget", static_cast<uint64_t>(b.budget));
+    r.set("estimate", estimate);
+    r.set("batch", static_cast<uint64_t>(b.batch));
+    r.set("max_edge", b.max_edge);
+    r.set("splits", static_cast<uint64_t>(st.splits));
+    r.set("pre_refinement_splits", static_cast<uint64_t>(st.pre_refinement_splits));
+    r.set("boundary_splits", static_cast<uint64_t>(st.boundary_splits));
+    r.set("new_vertices", static_cast<uint64_t>(st.new_vertices));
+    r.set("batches", static_cast<uint64_t>(st.batches));
+    r.set("non_manifold_edges_kept", static_cast<uint64_t>(st.non_manifold_edges_kept));
+    r.set("min_angle_before_deg", st.min_angle_before_deg);
+    r.set("min_angle_after_deg", st.min_angle_after_deg);
+    r.set("seconds_refine_rays", st.seconds_signal);
+    r.set("refine_overhead_fraction", st.seconds_total > 0 ? (st.seconds_total - st.seconds_signal) / st.seconds_total : 0.0);
+  }
+  if (b.refine == "uniform") r.set("levels", b.uniform.levels), r.set("scheme", scheme);
+  r.set("warnings", static_cast<uint64_t>(res.warnings.size()));
   add_defects(r, mesh.defects);
 
   std::printf("prtsub bake: %s -> %s\n", c.input.c_str(), output.c_str());
@@ -171,12 +192,24 @@ int cmd_bake(int argc, char** argv) {
               mesh.num_vertices(), static_cast<long long>(mesh.positions.rows()),
               mesh.normals_from_file ? "from file" : "computed");
   print_defects(mesh.defects);
+  if (b.refine == "adaptive") {
+    const RefineStats& st = res.refine;
+    std::printf("  refine:     adaptive, estimate %s, %zu splits (%zu boundary, %zu pre-refinement) in %zu batches\n",
+                estimate.c_str(), st.splits, st.boundary_splits, st.pre_refinement_splits, st.batches);
+    std::printf("              min angle %.3f° before, %.3f° after; %zu non-manifold edges never split\n",
+                st.min_angle_before_deg, st.min_angle_after_deg, st.non_manifold_edges_kept);
+    std::printf("              %.3f s, of which %.3f s tracing new vertices (overhead %.1f%%)\n", st.seconds_total,
+                st.seconds_signal, st.seconds_total > 0 ? 100 * (st.seconds_total - st.seconds_signal) / st.seconds_total : 0.0);
+  }
+  if (b.refine == "uniform")
+    std::printf("  refine:     uniform (OpenSubdiv, %s), %d levels, %.3f s\n", scheme.c_str(), b.uniform.levels, res.seconds_refine);
   std::printf("  transfer:   order %d (%d coefficients), %d rays per vertex, seed %llu\n", c.transfer.order,
               sh_count(c.transfer.order), c.transfer.rays, static_cast<unsigned long long>(c.transfer.seed));
-  std::printf("  rays:       %llu in %.3f s (%.2f Mrays/s)\n", static_cast<unsigned long long>(stats.rays),
-              stats.seconds, rays_per_second / 1e6);
-  std::printf("  time:       %.3f s total (load %.3f, scene %.3f, transfer %.3f, write %.3f); peak memory %.0f MiB\n",
-              total, t_load, t_scene, t_transfer, t_write, peak_memory_mib());
+  std::printf("  rays:       %llu in %.3f s (%.2f Mrays/s)\n", static_cast<unsigned long long>(res.rays), transfer_seconds,
+              rays_per_second / 1e6);
+  std::printf("  time:       %.3f s total (load %.3f, scene %.3f, transfer %.3f, refine %.3f, write %.3f); peak memory %.0f MiB\n",
+              total, res.seconds_load, res.seconds_scene, res.seconds_transfer, res.seconds_refine, t_write, peak_memory_mib());
+  for (const std::string& w : res.warnings) std::fprintf(stderr, "prtsub: warning: %s\n", w.c_str());
   if (!c.report.empty()) r.write(c.report);
   return 0;
 }
@@ -261,7 +294,7 @@ int cmd_bench(int argc, char** argv) {
   const double t_load = clock.lap();
   RayScene scene(mesh.positions, position_triangles(mesh));
   const double t_scene = clock.lap();
-  RowMatrixX3d points = vertex_points(mesh);
+  RowMatrixX3d points = vertex_positions(mesh);
 
   double best_transfer = INFINITY, best_bare = INFINITY;
   uint64_t rays = 0, occluded = 0;
@@ -468,6 +501,61 @@ int cmd_diff(int argc, char** argv) {
   return 0;
 }
 
+int cmd_eval(int argc, char** argv) {
+  std::string input, source, report;
+  ReferenceOptions ro;
+  int points = static_cast<int>(ro.points), rays = 0;
+  ArgParser args("eval",
+                 "Surface RMS transfer error of an asset, as a percentage of ||t_unshadowed||, at seeded area-\n"
+                 "stratified points on its source surface against a reference with many more rays. Each point is\n"
+                 "located in the asset through source_face, so any refinement can be judged on the same points.");
+  args.positional("ASSET", "a .ply asset written by prtsub bake", &input);
+  args.option("--source", "INPUT", "the mesh the asset was baked from (required)", &source);
+  args.option("--points", "N", "reference points", &points, 1, 10000000);
+  args.option("--rays", "R", "reference rays per point (0: 8x the asset's rays)", &rays, 0, 1 << 20);
+  args.option("--seed", "S", "reference seed; keep it fixed to compare assets", &ro.seed);
+  args.option("--threads", "T", "worker threads, 0 for every core", &ro.threads, 0, 1024);
+  args.option("--report", "R.json", "also write a flat JSON report", &report);
+  if (!args.parse(argc, argv, 2)) return 0;
+  if (source.empty()) throw UsageError("eval: missing --source INPUT");
+  if (!report.empty()) check_writable(report);
+  Stopwatch clock;
+  Asset asset = read_asset(input);
+  std::map<std::string, std::string> meta(asset.metadata.begin(), asset.metadata.end());
+  const int asset_rays = meta.count("rays") ? std::atoi(meta["rays"].c_str()) : 256;
+  const double crease = meta.count("crease_angle") ? std::atof(meta["crease_angle"].c_str()) : 60.0;
+  ro.points = static_cast<size_t>(points);
+  ro.rays = rays > 0 ? rays : 8 * std::max(asset_rays, 1);
+  ro.order = asset.order;
+  Mesh src = load_mesh(source, LoadOptions{crease});
+  RayScene scene(src.positions, position_triangles(src));
+  Reference ref = make_reference(src, scene, ro);
+  const double t_ref = clock.lap();
+  EvalResult e = evaluate(ref, asset.positions, asset.triangles, asset.source_face, asset.transfer);
+  std::printf("prtsub eval: %s against %s\n", input.c_str(), source.c_str());
+  std::printf("  asset:      %zu triangles, order %d, %d rays per vertex\n", asset.triangles.size(), asset.order, asset_rays);
+  std::printf("  reference:  %zu points, %d rays each (%.2f s); its own noise floor %.3f%%\n", e.points, ro.rays, t_ref,
+              e.noise_floor_percent);
+  std::printf("  error:      RMS %.3f%%, 95th percentile %.3f%% of ||t_unshadowed||\n", e.rms_percent, e.p95_percent);
+  if (e.unlocated) std::printf("  warning:    %zu reference points had no face in the asset\n", e.unlocated);
+  if (!report.empty()) {
+    Report r;
+    r.set("command", "eval");
+    r.set("input", input);
+    r.set("source", source);
+    r.set("triangles", static_cast<uint64_t>(asset.triangles.size()));
+    r.set("rms_percent", e.rms_percent);
+    r.set("p95_percent", e.p95_percent);
+    r.set("noise_floor_percent", e.noise_floor_percent);
+    r.set("reference_points", static_cast<uint64_t>(e.points));
+    r.set("reference_rays", ro.rays);
+    r.set("unlocated_points", static_cast<uint64_t>(e.unlocated));
+    r.set("seconds_reference", t_ref);
+    r.write(report);
+  }
+  return 0;
+}
+
 const char* kUsage =
     "usage: prtsub COMMAND [options]\n"
     "\n"
@@ -477,6 +565,7 @@ const char* kUsage =
     "  bake      compute per-vertex shadowed SH transfer and write a PRT asset\n"
     "  inspect   print and check what an asset holds, with its energy per SH band\n"
     "  bench     time the transfer stage against a bare Embree occlusion loop\n"
+    "  eval      surface RMS transfer error of an asset against a high-ray reference\n"
     "  render    relight an asset into a frame (Gouraud, or the per-pixel reference)\n"
     "  diff      compare two frames: relative RMSE, PSNR and an error heat map\n"
     "\n"
@@ -503,6 +592,7 @@ int run_cli(int argc, char** argv) {
     if (command == "inspect") return cmd_inspect(argc, argv);
     if (command == "bench") return cmd_bench(argc, argv);
     if (command == "render") return cmd_render(argc, argv);
+    if (command == "eval") return cmd_eval(argc, argv);
     if (command == "diff") return cmd_diff(argc, argv);
     throw UsageError("unknown command '" + command + "' (try prtsub --help)");
   } catch (const UsageError& e) {

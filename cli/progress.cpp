@@ -26,7 +26,12 @@ void Progress::add(size_t n) {
 
 void Progress::draw(size_t done) {
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  double frac = total_ ? double(done) / double(total_) : 1.0;
+  if (total_ == 0) {  // total unknown: a count
+    std::fprintf(stderr, "\r%s %zu done, %.1fs elapsed   ", label_.c_str(), done, secs);
+    std::fflush(stderr);
+    return;
+  }
+  double frac = double(done) / double(total_);
   double eta = frac > 0 ? secs * (1 - frac) / frac : 0;
   std::fprintf(stderr, "\r%s %5.1f%% (%zu/%zu) %.1fs elapsed, ~%.0fs left   ", label_.c_str(), 100 * frac, done, total_, secs, eta);
   std::fflush(stderr);

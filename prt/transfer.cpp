@@ -56,7 +56,7 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
   Eigen::Vector3f local = scene.to_local(points.row(i).transpose());
   Eigen::Vector3f origin = local + scene.ray_offset(local) * n.cast<float>();
   // Ray k belongs to half k & 1; each half is a lattice of its own size and shift.
-  Rng rng(opt.seed, static_cast<uint64_t>(i));
+  Rng rng(opt.seed, opt.stream_offset + static_cast<uint64_t>(i));
   const double shift[2][2] = {{rng.uniform(), rng.uniform()}, {rng.uniform(), rng.uniform()}};
   const uint32_t half_size[2] = {(R + 1) / 2, R / 2};
   for (uint32_t k = 0; k < R; ++k) {

@@ -13,6 +13,9 @@ struct TransferOptions {
   int rays = 256;      //!< rays per point
   uint64_t seed = 0;   //!< the result is a function of (seed, point index), not of threads
   int threads = 0;     //!< 0: every core
+  //! Point i draws its directions from stream stream_offset + i: give refinement's new
+  //! vertices their render-vertex index, so their rays do not depend on batching.
+  uint64_t stream_offset = 0;
 };
 
 //! Called from worker threads with the number of points just finished.

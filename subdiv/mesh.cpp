@@ -4,6 +4,12 @@
 
 namespace prtsub {
 
+RowMatrixX3d vertex_positions(const Mesh& mesh) {
+  RowMatrixX3d p(static_cast<Eigen::Index>(mesh.num_vertices()), 3);
+  for (size_t v = 0; v < mesh.num_vertices(); ++v) p.row(static_cast<Eigen::Index>(v)) = mesh.positions.row(mesh.vertex_position[v]);
+  return p;
+}
+
 Bounds bounds(const RowMatrixX3d& positions) {
   Bounds b;
   b.lo = positions.colwise().minCoeff().transpose();

@@ -52,6 +52,9 @@ struct Mesh {
   Eigen::Vector3d point(uint32_t v) const { return positions.row(vertex_position[v]).transpose(); }
 };
 
+//! Positions of render vertices: #V by 3.
+RowMatrixX3d vertex_positions(const Mesh& mesh);
+
 //! Axis-aligned bounds of the positions.
 struct Bounds {
   Eigen::Vector3d lo, hi;

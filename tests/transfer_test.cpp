@@ -11,15 +11,9 @@
 namespace prtsub {
 namespace {
 
-RowMatrixX3d vertex_points(const Mesh& m) {
-  RowMatrixX3d p(static_cast<Eigen::Index>(m.num_vertices()), 3);
-  for (size_t v = 0; v < m.num_vertices(); ++v) p.row(static_cast<Eigen::Index>(v)) = m.point(static_cast<uint32_t>(v)).transpose();
-  return p;
-}
-
 RowMatrixXd bake(const Mesh& m, const TransferOptions& o) {
   RayScene scene(m.positions, position_triangles(m));
-  return shadowed_transfer(scene, vertex_points(m), m.normals, o);
+  return shadowed_transfer(scene, vertex_positions(m), m.normals, o);
 }
 
 TEST(Transfer, ConvexMeshMatchesClosedFormBandNormsThroughOrder8) {

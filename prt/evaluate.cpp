@@ -1,0 +1,135 @@
+// Measuring error (PIPELINE.md): at a point, the worst unit-power light changes radiance by
+// exactly ‖Δt‖, so the surface RMS of ‖g − t_ref‖ / ‖t_unshadowed‖ is both the least-squares
+// objective and a worst-light error. Points are area-stratified: systematic sampling of the
+// cumulative area with one seeded offset gives each triangle a share of points proportional to
+// its area without clumping, and every asset baked from a source is judged on the same points.
+// Each point's transfer in the asset is found through source_face: only faces that lie in the
+// point's input triangle are candidates, so refinement of any kind can be judged.
+#include "prt/evaluate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "prt/render.h"
+#include "prt/sampling.h"
+#include "prt/sh.h"
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+
+double unshadowed_norm(int order) {
+  double s = 0;
+  for (int l = 0; l < order; ++l) s += clamped_cosine_band(l) * clamped_cosine_band(l) * (2 * l + 1) / (4 * M_PI);
+  return std::sqrt(s);
+}
+
+Reference make_reference(const Mesh& src, const RayScene& scene, const ReferenceOptions& o) {
+  if (o.points == 0) throw InputError("eval: --points must be positive");
+  std::vector<double> cumulative(src.num_faces() + 1, 0.0);
+  for (size_t f = 0; f < src.num_faces(); ++f) {
+    const Triangle& t = src.triangles[f];
+    cumulative[f + 1] = cumulative[f] + triangle_area(src.point(t[0]), src.point(t[1]), src.point(t[2]));
+  }
+  const double total = cumulative.back();
+  if (!(total > 0)) throw InputError("eval: the source has no area");
+  Reference ref;
+  ref.rays = o.rays;
+  const Eigen::Index n = static_cast<Eigen::Index>(o.points);
+  ref.points.resize(n, 3);
+  ref.normals.resize(n, 3);
+  ref.source_face.resize(o.points);
+  const RowMatrixX3d corners = vertex_positions(src);
+  Rng offset(o.seed, 0);
+  const double r0 = offset.uniform();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double target = (static_cast<double>(i) + r0) / static_cast<double>(n) * total;
+    size_t f = static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()) - 1;
+    f = std::min(f, src.num_faces() - 1);
+    Rng rng(o.seed, 1 + static_cast<uint64_t>(i));
+    double u = rng.uniform(), v = rng.uniform();
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const Triangle& t = src.triangles[f];
+    ref.points.row(i) = shading_point(corners, src.normals, t, u, v).transpose();
+    Eigen::Vector3d nrm = (1 - u - v) * src.normals.row(t[0]) + u * src.normals.row(t[1]) + v * src.normals.row(t[2]);
+    if (!(nrm.norm() > 1e-12)) nrm = (src.point(t[1]) - src.point(t[0])).cross(src.point(t[2]) - src.point(t[0]));
+    if (!(nrm.norm() > 0)) nrm = Eigen::Vector3d::UnitZ();
+    ref.normals.row(i) = nrm.normalized().transpose();
+    ref.source_face[static_cast<size_t>(i)] = src.source_face[f];
+  }
+  TransferOptions to;
+  to.order = o.order, to.rays = o.rays, to.seed = o.seed + 1, to.threads = o.threads;
+  ref.transfer = shadowed_transfer(scene, ref.points, ref.normals, to);
+  // The reference's own noise: trace the first points again with another seed.
+  const Eigen::Index m = std::min<Eigen::Index>(n, static_cast<Eigen::Index>(o.noise_points));
+  if (m > 0) {
+    to.seed = o.seed + 2;
+    RowMatrixXd again = shadowed_transfer(scene, ref.points.topRows(m), ref.normals.topRows(m), to);
+    const double diff = (again - ref.transfer.topRows(m)).rowwise().squaredNorm().mean();
+    ref.noise_floor = std::sqrt(diff / 2) / unshadowed_norm(o.order);  // one estimate's RMS error
+  }
+  return ref;
+}
+
+EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
+                    const std::vector<uint32_t>& source_face, const RowMatrixXd& transfer) {
+  const int K = static_cast<int>(std::min<Eigen::Index>(transfer.cols(), ref.transfer.cols()));
+  std::unordered_map<uint32_t, std::vector<uint32_t>> faces_of;
+  for (uint32_t f = 0; f < triangles.size(); ++f) faces_of[source_face[f]].push_back(f);
+  const double unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(K))));
+  EvalResult r;
+  r.reference_rays = ref.rays;
+  r.noise_floor_percent = 100 * ref.noise_floor;
+  std::vector<double> err;
+  err.reserve(static_cast<size_t>(ref.points.rows()));
+  for (Eigen::Index i = 0; i < ref.points.rows(); ++i) {
+    auto it = faces_of.find(ref.source_face[static_cast<size_t>(i)]);
+    if (it == faces_of.end()) {
+      ++r.unlocated;
+      continue;
+    }
+    const Eigen::Vector3d p = ref.points.row(i).transpose();
+    double best_score = -1e300;
+    uint32_t best = 0;
+    Eigen::Vector3d best_w;
+    for (uint32_t f : it->second) {
+      const Triangle& t = triangles[f];
+      const Eigen::Vector3d a = positions.row(t[0]), b = positions.row(t[1]), c = positions.row(t[2]);
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      const double nn = n.squaredNorm();
+      if (!(nn > 0)) continue;
+      // Barycentrics of p projected onto the face's plane: signed sub-areas over the area.
+      Eigen::Vector3d w(((b - p).cross(c - p)).dot(n) / nn, ((c - p).cross(a - p)).dot(n) / nn,
+                        ((a - p).cross(b - p)).dot(n) / nn);
+      const double score = w.minCoeff();  // >= 0 inside
+      if (score > best_score) best_score = score, best = f, best_w = w;
+      if (score >= 0) break;
+    }
+    if (best_score == -1e300) {
+      ++r.unlocated;
+      continue;
+    }
+    // Clamp to the face: a point just outside (rounding, or a moved Loop surface) takes the
+    // nearest barycentrics.
+    Eigen::Vector3d w = best_w.cwiseMax(0.0);
+    w /= w.sum();
+    const Triangle& t = triangles[best];
+    double e2 = 0;
+    for (int k = 0; k < K; ++k) {
+      const double g = w[0] * transfer(t[0], k) + w[1] * transfer(t[1], k) + w[2] * transfer(t[2], k);
+      const double d = g - ref.transfer(i, k);
+      e2 += d * d;
+    }
+    err.push_back(std::sqrt(e2) / unit);
+  }
+  r.points = err.size();
+  if (err.empty()) throw InputError("eval: no reference point could be located in the asset (is --source the asset's input?)");
+  double s = 0;
+  for (double e : err) s += e * e;
+  r.rms_percent = 100 * std::sqrt(s / static_cast<double>(err.size()));
+  std::sort(err.begin(), err.end());
+  r.p95_percent = 100 * err[std::min(err.size() - 1, static_cast<size_t>(0.95 * static_cast<double>(err.size())))];
+  return r;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,46 @@
+// Surface RMS transfer error of an asset against a high-ray reference on its source surface.
+#pragma once
+
+#include "prt/asset.h"
+#include "prt/transfer.h"
+
+namespace prtsub {
+
+struct ReferenceOptions {
+  size_t points = 20000;  //!< area-stratified reference points on the source surface
+  int rays = 2048;        //!< reference rays per point
+  int order = 4;
+  uint64_t seed = 20250;  //!< fixed: every asset from one source is judged on the same points
+  int threads = 0;
+  size_t noise_points = 2000;  //!< points traced twice to measure the reference's own noise
+};
+
+//! Reference points with their transfer. The points depend only on the source and the seed.
+struct Reference {
+  RowMatrixX3d points, normals;      //!< #N by 3, on the source surface
+  std::vector<uint32_t> source_face;  //!< #N: input triangle (as numbered by source_face)
+  RowMatrixXd transfer;              //!< #N by K, at `rays` rays
+  double noise_floor = 0;            //!< RMS of the reference's own error, relative to ‖t_unshadowed‖
+  int rays = 0;
+};
+
+//! Seeded, area-stratified points on `source` (systematic sampling of cumulative area, one
+//! random offset; uniform within each triangle), transfer at each.
+Reference make_reference(const Mesh& source, const RayScene& scene, const ReferenceOptions& options);
+
+struct EvalResult {
+  double rms_percent = 0, p95_percent = 0, noise_floor_percent = 0;
+  size_t points = 0, unlocated = 0;
+  int reference_rays = 0;
+};
+
+//! ‖t_unshadowed‖, the same for every normal: the unit of every error we report.
+double unshadowed_norm(int order);
+
+//! Interpolates the asset's transfer at each reference point, found among the asset's faces
+//! with the point's source_face (the one containing it, or the nearest). Error per point is
+//! ‖g(p) − t_ref(p)‖ / ‖t_unshadowed‖; RMS and 95th percentile over points, in percent.
+EvalResult evaluate(const Reference& reference, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
+                    const std::vector<uint32_t>& source_face, const RowMatrixXd& transfer);
+
+}  // namespace prtsub

@@ -1,0 +1,78 @@
+// Edge estimates see only the two vertices of an edge. That is cheap, but a shadow crossing a
+// long edge between two lit vertices is invisible to them; --max-edge pre-refinement (D3DX's
+// answer) bounds how long such an edge can be.
+//
+// "Length" is ours. The surface RMS error that eval measures integrates squared error over
+// area. An edge whose endpoint transfers differ by Δ leaves an interpolation error of order
+// Δ over a strip whose area grows with the edge's length, so ranking by ‖Δt‖·|ab| (rather
+// than ‖Δt‖ alone) spends splits where they buy the most error per triangle, instead of on
+// tiny edges at a sharp shadow. BENCHMARKS.md has the measurement that chose the default.
+#include "prt/refine_signal.h"
+
+#include <cmath>
+
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+
+EdgeEstimate parse_estimate(const std::string& name) {
+  if (name == "relative") return EdgeEstimate::Relative;
+  if (name == "shadow") return EdgeEstimate::Shadow;
+  if (name == "curvature") return EdgeEstimate::Curvature;
+  if (name == "length") return EdgeEstimate::Length;
+  throw InputError("--estimate must be relative, shadow, curvature or length, got '" + name + "'");
+}
+
+const char* estimate_name(EdgeEstimate e) {
+  switch (e) {
+    case EdgeEstimate::Relative: return "relative";
+    case EdgeEstimate::Shadow: return "shadow";
+    case EdgeEstimate::Curvature: return "curvature";
+    case EdgeEstimate::Length: return "length";
+  }
+  return "?";
+}
+
+TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOptions& options)
+    : scene_(scene), options_(options) {
+  check_transfer_options(options.transfer);
+}
+
+double TransferSignal::edge_error(const EdgeView& e) const {
+  double d2 = 0, a2 = 0, b2 = 0;
+  for (int i = 0; i < e.K; ++i) {
+    const double d = e.va[i] - e.vb[i];
+    d2 += d * d, a2 += e.va[i] * e.va[i], b2 += e.vb[i] * e.vb[i];
+  }
+  const double diff = std::sqrt(d2);
+  switch (options_.estimate) {
+    case EdgeEstimate::Relative: {
+      const double mean = 0.5 * (std::sqrt(a2) + std::sqrt(b2));
+      return mean > 1e-12 ? diff / mean : (diff > 0 ? diff / 1e-12 : 0.0);
+    }
+    case EdgeEstimate::Shadow: return diff;
+    case EdgeEstimate::Curvature: {
+      const double angle = std::acos(std::clamp(e.na.dot(e.nb), -1.0, 1.0));
+      return diff / std::max(angle, options_.curvature_guard_deg * M_PI / 180);
+    }
+    case EdgeEstimate::Length: return diff * (e.pa - e.pb).norm();
+  }
+  return diff;
+}
+
+void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd&, RowMatrixXd& values) {
+  if (batch.empty()) return;
+  RowMatrixX3d points(static_cast<Eigen::Index>(batch.size()), 3), normals(static_cast<Eigen::Index>(batch.size()), 3);
+  for (size_t i = 0; i < batch.size(); ++i) {
+    points.row(static_cast<Eigen::Index>(i)) = batch[i].position.transpose();
+    normals.row(static_cast<Eigen::Index>(i)) = batch[i].normal.transpose();
+  }
+  // A batch's vertices have consecutive indices: stream = render-vertex index.
+  TransferOptions o = options_.transfer;
+  o.stream_offset = batch.front().index;
+  TransferStats stats;
+  values = shadowed_transfer(scene_, points, normals, o, &stats);
+  rays_ += stats.rays;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,43 @@
+// Transfer as the signal of adaptive refinement: edge error estimates over SH transfer
+// vectors, and Embree transfer for the vertices refinement creates.
+#pragma once
+
+#include <string>
+
+#include "prt/transfer.h"
+#include "subdiv/refine.h"
+
+namespace prtsub {
+
+//! Edge error estimates (PIPELINE.md, "Refinement"; Δt = t_a − t_b).
+enum class EdgeEstimate {
+  Relative,   //!< (1) ‖Δt‖ / mean(‖t_a‖, ‖t_b‖)
+  Shadow,     //!< (2) ‖Δt‖
+  Curvature,  //!< (3) ‖Δt‖ / max(angle(n_a, n_b), θ0)
+  Length,     //!< ours: ‖Δt‖ · |ab|, the edge's share of the surface integral of error
+};
+
+EdgeEstimate parse_estimate(const std::string& name);
+const char* estimate_name(EdgeEstimate e);
+
+struct TransferSignalOptions {
+  EdgeEstimate estimate = EdgeEstimate::Length;
+  double curvature_guard_deg = 10;  //!< θ0 of the curvature estimate
+  TransferOptions transfer;        //!< order, rays, seed, threads of new vertices' transfer
+};
+
+//! Refinement's signal: transfer computed with the scene of the (unchanged) geometry.
+class TransferSignal : public RefinementSignal {
+ public:
+  TransferSignal(const RayScene& scene, const TransferSignalOptions& options);
+  double edge_error(const EdgeView& edge) const override;
+  void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd& parent_values, RowMatrixXd& values) override;
+  uint64_t rays() const { return rays_; }
+
+ private:
+  const RayScene& scene_;
+  TransferSignalOptions options_;
+  uint64_t rays_ = 0;
+};
+
+}  // namespace prtsub

@@ -1,0 +1,159 @@
+// Uniform 1→4 refinement with OpenSubdiv Far. Far's bilinear scheme would turn triangles into
+// quads, so the topology is Loop's and positions are interpolated with InterpolateVarying
+// (exact edge midpoints: the linear split) or Interpolate (Loop's smooth positions). Render
+// vertices are a face-varying channel with linear interpolation everywhere, so a crease's two
+// sides refine separately. For Loop, edges on creases are tagged infinitely sharp, so hard
+// edges stay hard.
+#include "subdiv/uniform.h"
+
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+
+#include <map>
+#include <memory>
+
+#include "subdiv/exceptions.h"
+#include "subdiv/mesh_io.h"
+
+namespace prtsub {
+namespace {
+
+namespace Far = OpenSubdiv::Far;
+namespace Sdc = OpenSubdiv::Sdc;
+
+struct Vec3 {
+  double x = 0, y = 0, z = 0;
+  void Clear(void* = nullptr) { x = y = z = 0; }
+  void AddWithWeight(const Vec3& s, float w) { x += w * s.x, y += w * s.y, z += w * s.z; }
+};
+
+void far_error(Far::ErrorType, const char* message) { throw InputError(std::string("OpenSubdiv: ") + message); }
+
+}  // namespace
+
+UniformScheme parse_uniform_scheme(const std::string& name) {
+  if (name == "linear") return UniformScheme::Linear;
+  if (name == "loop") return UniformScheme::Loop;
+  throw InputError("--scheme must be linear or loop, got '" + name + "'");
+}
+
+Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
+  if (opt.levels < 1 || opt.levels > 8) throw InputError("--levels must be between 1 and 8");
+  const int F = static_cast<int>(mesh.num_faces());
+  std::vector<int> verts_per_face(static_cast<size_t>(F), 3), pos_idx, fvar_idx;
+  for (const Triangle& t : mesh.triangles)
+    for (uint32_t v : t) pos_idx.push_back(static_cast<int>(mesh.vertex_position[v])), fvar_idx.push_back(static_cast<int>(v));
+
+  // Crease edges (faces on either side use different render vertices) are sharp for Loop.
+  std::vector<int> crease_pairs;
+  std::vector<float> crease_weights;
+  if (opt.scheme == UniformScheme::Loop) {
+    std::map<std::pair<int, int>, std::pair<uint64_t, int>> seen;  // edge -> (render pair, count)
+    for (const Triangle& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t a = t[k], b = t[(k + 1) % 3];
+        int pa = static_cast<int>(mesh.vertex_position[a]), pb = static_cast<int>(mesh.vertex_position[b]);
+        auto key = std::minmax(pa, pb);
+        uint64_t render = pa < pb ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
+        auto [it, inserted] = seen.emplace(key, std::make_pair(render, 1));
+        if (!inserted && ++it->second.second == 2 && it->second.first != render) {
+          crease_pairs.push_back(key.first), crease_pairs.push_back(key.second);
+          crease_weights.push_back(Sdc::Crease::SHARPNESS_INFINITE);
+        }
+      }
+  }
+
+  Far::TopologyDescriptor desc;
+  desc.numVertices = static_cast<int>(mesh.positions.rows());
+  desc.numFaces = F;
+  desc.numVertsPerFace = verts_per_face.data();
+  desc.vertIndicesPerFace = pos_idx.data();
+  desc.numCreases = static_cast<int>(crease_weights.size());
+  desc.creaseVertexIndexPairs = crease_pairs.data();
+  desc.creaseWeights = crease_weights.data();
+  Far::TopologyDescriptor::FVarChannel channel;
+  channel.numValues = static_cast<int>(mesh.num_vertices());
+  channel.valueIndices = fvar_idx.data();
+  desc.numFVarChannels = 1;
+  desc.fvarChannels = &channel;
+
+  Sdc::Options sdc;
+  sdc.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_ONLY);
+  sdc.SetFVarLinearInterpolation(Sdc::Options::FVAR_LINEAR_ALL);
+  Far::SetErrorCallback(far_error);
+  std::unique_ptr<Far::TopologyRefiner> refiner(Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Create(
+      desc, Far::TopologyRefinerFactory<Far::TopologyDescriptor>::Options(Sdc::SCHEME_LOOP, sdc)));
+  if (!refiner) throw InputError("OpenSubdiv could not build the topology");
+  refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(opt.levels));
+
+  // Interpolate positions (vertex data) and normals (face-varying) level by level.
+  std::vector<Vec3> pos(static_cast<size_t>(refiner->GetNumVerticesTotal()));
+  std::vector<Vec3> nrm(static_cast<size_t>(refiner->GetNumFVarValuesTotal(0)));
+  for (Eigen::Index i = 0; i < mesh.positions.rows(); ++i) pos[i] = {mesh.positions(i, 0), mesh.positions(i, 1), mesh.positions(i, 2)};
+  for (Eigen::Index i = 0; i < mesh.normals.rows(); ++i) nrm[i] = {mesh.normals(i, 0), mesh.normals(i, 1), mesh.normals(i, 2)};
+  Far::PrimvarRefiner primvar(*refiner);
+  Vec3 *psrc = pos.data(), *nsrc = nrm.data();
+  for (int level = 1; level <= opt.levels; ++level) {
+    Vec3* pdst = psrc + refiner->GetLevel(level - 1).GetNumVertices();
+    Vec3* ndst = nsrc + refiner->GetLevel(level - 1).GetNumFVarValues(0);
+    if (opt.scheme == UniformScheme::Linear) primvar.InterpolateVarying(level, psrc, pdst);
+    else primvar.Interpolate(level, psrc, pdst);
+    primvar.InterpolateFaceVarying(level, nsrc, ndst, 0);
+    psrc = pdst, nsrc = ndst;
+  }
+
+  const Far::TopologyLevel& last = refiner->GetLevel(opt.levels);
+  // source_face through the chain of parents.
+  std::vector<uint32_t> source(static_cast<size_t>(last.GetNumFaces()));
+  for (int f = 0; f < last.GetNumFaces(); ++f) {
+    int parent = f;
+    for (int level = opt.levels; level >= 1; --level) parent = refiner->GetLevel(level).GetFaceParentFace(parent);
+    source[static_cast<size_t>(f)] = mesh.source_face[static_cast<size_t>(parent)];
+  }
+
+  if (opt.scheme == UniformScheme::Loop) {
+    // New geometry: rebuild render vertices and normals from it with the crease angle.
+    RawMesh raw;
+    raw.positions.resize(last.GetNumVertices(), 3);
+    for (int v = 0; v < last.GetNumVertices(); ++v) raw.positions.row(v) << psrc[v].x, psrc[v].y, psrc[v].z;
+    raw.face_offsets.push_back(0);
+    for (int f = 0; f < last.GetNumFaces(); ++f) {
+      for (int v : last.GetFaceVertices(f)) raw.face_indices.push_back(v);
+      raw.face_offsets.push_back(raw.face_indices.size());
+    }
+    Mesh out = build_mesh(raw, "loop subdivision", LoadOptions{opt.crease_angle_deg});
+    for (uint32_t& s : out.source_face) s = source[s];
+    out.input_triangles = mesh.input_triangles;
+    out.input_vertices = mesh.input_vertices;
+    out.defects = mesh.defects;
+    return out;
+  }
+
+  Mesh out;
+  out.input_triangles = mesh.input_triangles;
+  out.input_vertices = mesh.input_vertices;
+  out.defects = mesh.defects;
+  out.normals_from_file = mesh.normals_from_file;
+  out.positions.resize(last.GetNumVertices(), 3);
+  for (int v = 0; v < last.GetNumVertices(); ++v) out.positions.row(v) << psrc[v].x, psrc[v].y, psrc[v].z;
+  const int nv = last.GetNumFVarValues(0);
+  out.vertex_position.assign(static_cast<size_t>(nv), UINT32_MAX);
+  out.normals.resize(nv, 3);
+  for (int i = 0; i < nv; ++i) {
+    Eigen::Vector3d n(nsrc[i].x, nsrc[i].y, nsrc[i].z);
+    out.normals.row(i) = (n.norm() > 1e-12 ? n.normalized() : Eigen::Vector3d::UnitZ()).transpose();
+  }
+  out.triangles.resize(static_cast<size_t>(last.GetNumFaces()));
+  for (int f = 0; f < last.GetNumFaces(); ++f) {
+    auto fv = last.GetFaceVertices(f);
+    auto fvar = last.GetFaceFVarValues(f, 0);
+    for (int k = 0; k < 3; ++k) {
+      out.triangles[static_cast<size_t>(f)][static_cast<size_t>(k)] = static_cast<uint32_t>(fvar[k]);
+      out.vertex_position[static_cast<size_t>(fvar[k])] = static_cast<uint32_t>(fv[k]);
+    }
+  }
+  out.source_face = source;
+  return out;
+}
+
+}  // namespace prtsub
