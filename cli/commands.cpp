@@ -16,6 +16,7 @@
 #include "cli/args.h"
 #include "cli/progress.h"
 #include "cli/report.h"
+#include "cli/compare.h"
 #include "cli/pipeline.h"
 #include "prt/asset.h"
 #include "prt/evaluate.h"
@@ -45,16 +46,6 @@ class Stopwatch {
  private:
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_ = start_;
 };
-
-// Fails before any work when the output cannot be created, so a long bake never ends in an
-// unwritable path. Leaves nothing behind.
-void check_writable(const std::string& path) {
-  const std::string probe = path + ".tmp.probe." + std::to_string(::getpid());
-  std::ofstream f(probe);
-  if (!f) throw IoError(path + ": cannot create output file (" + std::strerror(errno) + ")");
-  f.close();
-  std::remove(probe.c_str());
-}
 
 void add_defects(Report& r, const MeshDefects& d) {
   r.set("defects_degenerate_faces", static_cast<uint64_t>(d.degenerate_faces));
@@ -295,6 +286,7 @@ int cmd_bench(int argc, char** argv) {
   RayScene scene(mesh.positions, position_triangles(mesh));
   const double t_scene = clock.lap();
   RowMatrixX3d points = vertex_positions(mesh);
+  const RowMatrixX3d offsets = vertex_offset_directions(mesh);
 
   double best_transfer = INFINITY, best_bare = INFINITY;
   uint64_t rays = 0, occluded = 0;
@@ -302,8 +294,8 @@ int cmd_bench(int argc, char** argv) {
               c.transfer.order, c.transfer.rays);
   for (int i = 0; i < repeat; ++i) {
     TransferStats bare, full;
-    occluded = bare_occlusion_loop(scene, points, mesh.normals, c.transfer, &bare);
-    shadowed_transfer(scene, points, mesh.normals, c.transfer, &full);
+    occluded = bare_occlusion_loop(scene, points, mesh.normals, c.transfer, &bare, &offsets);
+    shadowed_transfer(scene, points, mesh.normals, c.transfer, &full, {}, &offsets);
     rays = full.rays;
     best_bare = std::min(best_bare, bare.seconds);
     best_transfer = std::min(best_transfer, full.seconds);
@@ -565,6 +557,7 @@ const char* kUsage =
     "  bake      compute per-vertex shadowed SH transfer and write a PRT asset\n"
     "  inspect   print and check what an asset holds, with its energy per SH band\n"
     "  bench     time the transfer stage against a bare Embree occlusion loop\n"
+    "  compare   uniform against adaptive refinement: tables, plots and relit frames\n"
     "  eval      surface RMS transfer error of an asset against a high-ray reference\n"
     "  render    relight an asset into a frame (Gouraud, or the per-pixel reference)\n"
     "  diff      compare two frames: relative RMSE, PSNR and an error heat map\n"
@@ -593,6 +586,7 @@ int run_cli(int argc, char** argv) {
     if (command == "bench") return cmd_bench(argc, argv);
     if (command == "render") return cmd_render(argc, argv);
     if (command == "eval") return cmd_eval(argc, argv);
+    if (command == "compare") return cmd_compare(argc, argv);
     if (command == "diff") return cmd_diff(argc, argv);
     throw UsageError("unknown command '" + command + "' (try prtsub --help)");
   } catch (const UsageError& e) {

@@ -32,7 +32,8 @@ BakeResult run_bake(const BakeSettings& s, const ProgressFn& progress) {
   RayScene scene(r.mesh.positions, position_triangles(r.mesh));
   r.seconds_scene = since(t);
   TransferStats stats;
-  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, s.transfer, &stats, progress);
+  const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
+  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, s.transfer, &stats, progress, &offsets);
   r.rays = stats.rays;
   r.seconds_transfer = since(t);
   if (s.refine == "adaptive") {

@@ -3,7 +3,13 @@
 #include <sys/resource.h>
 
 #include <cmath>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+
+#include "subdiv/exceptions.h"
 
 #include "prt/asset.h"
 
@@ -61,6 +67,14 @@ std::string Report::json() const {
 }
 
 void Report::write(const std::string& path) const { write_file_atomically(path, json()); }
+
+void check_writable(const std::string& path) {
+  const std::string probe = path + ".tmp.probe." + std::to_string(::getpid());
+  FILE* f = std::fopen(probe.c_str(), "wb");
+  if (!f) throw IoError(path + ": cannot create output file (" + std::strerror(errno) + ")");
+  std::fclose(f);
+  std::remove(probe.c_str());
+}
 
 double peak_memory_mib() {
   rusage usage{};

@@ -26,6 +26,10 @@ class Report {
   std::vector<std::pair<std::string, std::string>> entries_;
 };
 
+//! Fails before any work when `path` cannot be created, so a long run never ends in an
+//! unwritable path. Leaves nothing behind. \throw IoError
+void check_writable(const std::string& path);
+
 //! Peak resident memory of this process so far, in MiB.
 double peak_memory_mib();
 

@@ -63,15 +63,19 @@ double TransferSignal::edge_error(const EdgeView& e) const {
 void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd&, RowMatrixXd& values) {
   if (batch.empty()) return;
   RowMatrixX3d points(static_cast<Eigen::Index>(batch.size()), 3), normals(static_cast<Eigen::Index>(batch.size()), 3);
+  std::vector<uint32_t> position_of(batch.size());
   for (size_t i = 0; i < batch.size(); ++i) {
     points.row(static_cast<Eigen::Index>(i)) = batch[i].position.transpose();
     normals.row(static_cast<Eigen::Index>(i)) = batch[i].normal.transpose();
+    position_of[i] = batch[i].position_index;
   }
+  // Both sides of a split crease are made by one split, so they are in this batch together.
+  const RowMatrixX3d offsets = offset_directions(position_of, normals);
   // A batch's vertices have consecutive indices: stream = render-vertex index.
   TransferOptions o = options_.transfer;
   o.stream_offset = batch.front().index;
   TransferStats stats;
-  values = shadowed_transfer(scene_, points, normals, o, &stats);
+  values = shadowed_transfer(scene_, points, normals, o, &stats, {}, &offsets);
   rays_ += stats.rays;
 }
 

@@ -30,6 +30,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 #include "prt/sampling.h"
 #include "prt/sh.h"
@@ -47,14 +48,15 @@ struct PointRays {
 
 // Fills the R rays of point i and traces them; afterwards rays[k].tfar == -inf if occluded.
 void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
-                 Eigen::Index i, const TransferOptions& opt, PointRays& buf) {
+                 const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, PointRays& buf) {
   const uint32_t R = static_cast<uint32_t>(opt.rays);
   buf.rays.resize(R);
   buf.directions.resize(R);
   Eigen::Vector3d n = normals.row(i).transpose(), t, b;
   tangent_frame(n, t, b);
   Eigen::Vector3f local = scene.to_local(points.row(i).transpose());
-  Eigen::Vector3f origin = local + scene.ray_offset(local) * n.cast<float>();
+  const Eigen::Vector3d away = offsets ? Eigen::Vector3d(offsets->row(i).transpose()) : n;
+  Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
   // Ray k belongs to half k & 1; each half is a lattice of its own size and shift.
   Rng rng(opt.seed, opt.stream_offset + static_cast<uint64_t>(i));
   const double shift[2][2] = {{rng.uniform(), rng.uniform()}, {rng.uniform(), rng.uniform()}};
@@ -97,7 +99,7 @@ void check_transfer_options(const TransferOptions& o) {
 
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& opt,
-                              TransferStats* stats, const ProgressFn& progress) {
+                              TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets) {
   check_transfer_options(opt);
   const int K = sh_count(opt.order);
   const Eigen::Index P = points.rows();
@@ -109,7 +111,7 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
     double acc[kMaxShOrder * kMaxShOrder];
     const uint32_t R = static_cast<uint32_t>(opt.rays);
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      trace_point(scene, points, normals, i, opt, buf);
+      trace_point(scene, points, normals, offsets, i, opt, buf);
       // Visible counts of the even (A) and odd (B) halves.
       uint32_t visible[2] = {0, 0}, size[2] = {(R + 1) / 2, R / 2};
       for (uint32_t k = 0; k < R; ++k) visible[k & 1] += !occluded(buf.rays[k]);
@@ -148,7 +150,7 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
 
 uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
                              const RowMatrixX3d& normals, const TransferOptions& opt,
-                             TransferStats* stats) {
+                             TransferStats* stats, const RowMatrixX3d* offsets) {
   check_transfer_options(opt);
   std::atomic<uint64_t> hits{0};
   auto t0 = std::chrono::steady_clock::now();
@@ -156,7 +158,7 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
     thread_local PointRays buf;
     uint64_t local = 0;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      trace_point(scene, points, normals, i, opt, buf);
+      trace_point(scene, points, normals, offsets, i, opt, buf);
       for (const RTCRay& r : buf.rays) local += occluded(r);
     }
     hits += local;
@@ -168,5 +170,30 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
   }
   return hits.load();
 }
+
+}  // namespace prtsub
+
+namespace prtsub {
+
+RowMatrixX3d offset_directions(const std::vector<uint32_t>& position_of, const RowMatrixX3d& normals) {
+  std::unordered_map<uint32_t, Eigen::Vector3d> sum;
+  for (size_t v = 0; v < position_of.size(); ++v) {
+    auto [it, inserted] = sum.emplace(position_of[v], Eigen::Vector3d::Zero());
+    it->second += normals.row(static_cast<Eigen::Index>(v)).transpose();
+  }
+  RowMatrixX3d out(normals.rows(), 3);
+  for (size_t v = 0; v < position_of.size(); ++v) {
+    const Eigen::Vector3d own = normals.row(static_cast<Eigen::Index>(v)).transpose();
+    const Eigen::Vector3d& s = sum[position_of[v]];
+    const double len = s.norm();
+    // Mean direction, unless the sides nearly cancel or it leans away from this side.
+    Eigen::Vector3d d = len > 1e-6 ? Eigen::Vector3d(s / len) : own;
+    if (d.dot(own) < 0.05) d = own;
+    out.row(static_cast<Eigen::Index>(v)) = d.transpose();
+  }
+  return out;
+}
+
+RowMatrixX3d vertex_offset_directions(const Mesh& mesh) { return offset_directions(mesh.vertex_position, mesh.normals); }
 
 }  // namespace prtsub

@@ -29,18 +29,31 @@ struct TransferStats {
 //! t_i(p) = ∫ V(p,ω) max(n·ω,0) y_i(ω) dω at each point.
 //! \param points #P by 3 world positions on the surface of `scene`
 //! \param normals #P by 3 unit shading normals
+//! \param offsets #P by 3 unit directions to move ray origins off the surface (default: the
+//!        normals); see vertex_offset_directions
 //! \return #P by N² row-major transfer
 //! \throw InputError for an order or ray count out of range, EmbreeError on Embree failure
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& options,
-                              TransferStats* stats = nullptr, const ProgressFn& progress = {});
+                              TransferStats* stats = nullptr, const ProgressFn& progress = {},
+                              const RowMatrixX3d* offsets = nullptr);
 
 //! The baseline for benchmarks: the same rays from the same points with the same thread
 //! count, with nothing done but counting occluded rays.
 //! \return the number of occluded rays
 uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
                              const RowMatrixX3d& normals, const TransferOptions& options,
-                             TransferStats* stats = nullptr);
+                             TransferStats* stats = nullptr, const RowMatrixX3d* offsets = nullptr);
+
+//! Where a mesh vertex's rays start from: along the mean of the normals of every render
+//! vertex at its position. At a crease that points off every face meeting there (into the
+//! corner when concave, out when convex); offset along its own normal only, a vertex on a
+//! concave crease would start in the other face's plane, and rays would leak through it.
+//! Falls back to the vertex's own normal where the sides cancel (back-to-back sheets).
+RowMatrixX3d vertex_offset_directions(const Mesh& mesh);
+
+//! The same for vertices given by position index and normal (#P rows each).
+RowMatrixX3d offset_directions(const std::vector<uint32_t>& position_of, const RowMatrixX3d& normals);
 
 //! Validates options; \throw InputError naming the bad value.
 void check_transfer_options(const TransferOptions& options);

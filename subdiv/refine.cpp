@@ -270,7 +270,7 @@ class Refiner {
     nrm_.push_back(n.normalized());
     for (int i = 0; i < K_; ++i) val_.push_back(0.5 * (val_[size_t(a) * K_ + i] + val_[size_t(b) * K_ + i]));
     for (int i = 0; i < A_; ++i) attr_.push_back(0.5 * (attr_[size_t(a) * A_ + i] + attr_[size_t(b) * A_ + i]));
-    pending_.push_back({v, a, b, pos_[position], nrm_.back()});
+    pending_.push_back({v, a, b, position, pos_[position], nrm_.back()});
     return v;
   }
 

@@ -21,6 +21,7 @@ struct EdgeView {
 struct NewVertex {
   uint32_t index;                  //!< its render-vertex index
   uint32_t a, b;                   //!< parents
+  uint32_t position_index;         //!< its position (shared by both sides of a crease)
   Eigen::Vector3d position, normal;
 };
 

@@ -13,7 +13,8 @@ namespace {
 
 RowMatrixXd bake(const Mesh& m, const TransferOptions& o) {
   RayScene scene(m.positions, position_triangles(m));
-  return shadowed_transfer(scene, vertex_positions(m), m.normals, o);
+  const RowMatrixX3d offsets = vertex_offset_directions(m);
+  return shadowed_transfer(scene, vertex_positions(m), m.normals, o, nullptr, {}, &offsets);
 }
 
 TEST(Transfer, ConvexMeshMatchesClosedFormBandNormsThroughOrder8) {
@@ -172,6 +173,39 @@ TEST(Transfer, HighOrderAndSingleRayStayFinite) {
   RowMatrixXd t = bake(m, o);
   EXPECT_TRUE(t.allFinite());
   EXPECT_EQ(t.cols(), 100);
+}
+
+}  // namespace
+}  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+TEST(Transfer, ConcaveCreaseVerticesDoNotLeakLight) {
+  // A floor (z = 0, x > 0) meeting a wall (x = 0, z > 0) at a 90° crease, each two quads
+  // 10^3 across. The crease vertex in the middle (the origin), on the floor's side, has the wall
+  // blocking exactly the half of its hemisphere with x < 0: t_0 = π·y_00 / 2, and likewise on
+  // the wall's side. Offset along its own normal only, its origin would stay in the other
+  // face's plane and rays would leak through it.
+  RawMesh r;
+  const double L = 1000;
+  r.positions.resize(9, 3);
+  r.positions << 0, -L, 0, 0, 0, 0, 0, L, 0, L, -L, 0, L, 0, 0, L, L, 0, 0, -L, L, 0, 0, L, 0, L, L;
+  r.face_indices = {0, 3, 4, 1, 1, 4, 5, 2, 0, 1, 7, 6, 1, 2, 8, 7};
+  r.face_offsets = {0, 4, 8, 12, 16};
+  Mesh m = test::build(r, 60);
+  ASSERT_EQ(m.num_vertices(), 12u);  // the crease splits its three positions
+  TransferOptions o;
+  o.rays = 512;
+  RowMatrixXd t = bake(m, o);
+  const double half = M_PI * 0.5 / std::sqrt(M_PI) / 2;
+  int checked = 0;
+  for (uint32_t v = 0; v < m.num_vertices(); ++v) {
+    if (m.point(v).norm() > 1e-9) continue;  // the middle of the crease only
+    EXPECT_NEAR(t(v, 0), half, 0.01 * half) << "vertex " << v << " normal " << m.normals.row(v);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
 }
 
 }  // namespace
