@@ -31,7 +31,6 @@
 namespace prtsub {
 namespace {
 
-constexpr const char* kVersion = "0.1.0";
 
 class Stopwatch {
  public:
@@ -578,7 +577,7 @@ int run_cli(int argc, char** argv) {
       return 0;
     }
     if (command == "--version") {
-      std::printf("prtsub %s\n", kVersion);
+      std::printf("prtsub %s\n", kPrtsubVersion);
       return 0;
     }
     if (command == "bake") return cmd_bake(argc, argv);

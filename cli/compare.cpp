@@ -5,11 +5,10 @@
 // The page is self-contained: inline SVG plots and PNG frames as data URIs.
 #include "cli/compare.h"
 
-#include <sys/stat.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -22,6 +21,7 @@
 #include "prt/lights.h"
 #include "prt/render.h"
 #include "prt/sh.h"
+#include "subdiv/exceptions.h"
 #include "subdiv/ply.h"
 
 namespace prtsub {
@@ -176,7 +176,11 @@ int cmd_compare(int argc, char** argv) {
   int fw = 0, fh = 0;
   if (std::sscanf(frame_size.c_str(), "%d,%d", &fw, &fh) != 2 || fw < 1 || fh < 1 || fw > 8192 || fh > 8192)
     throw UsageError("--frame-size: expected W,H");
-  ::mkdir(out_dir.c_str(), 0755);
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec) throw IoError(out_dir + ": cannot create directory (" + ec.message() + ")");
+  }
   check_writable(out_dir + "/results.csv");
   if (!report.empty()) check_writable(report);
 

@@ -67,6 +67,7 @@ BakeResult run_bake(const BakeSettings& s, const ProgressFn& progress) {
     r.metadata.push_back({"levels", std::to_string(s.uniform.levels)});
     r.metadata.push_back({"scheme", s.uniform.scheme == UniformScheme::Loop ? "loop" : "linear"});
   }
+  r.metadata.push_back({"generator", std::string("prtsub ") + kPrtsubVersion});
   return r;
 }
 

@@ -12,6 +12,8 @@
 
 namespace prtsub {
 
+constexpr const char* kPrtsubVersion = "0.1.0";
+
 struct BakeSettings {
   std::string input;
   LoadOptions load;

@@ -166,30 +166,35 @@ class Refiner {
   }
 
   // Refines along the longest-edge path from t until t is split. Returns false if the next
-  // split would exceed the budget.
+  // split would exceed the budget. The path is kept as a stack: after a terminal split only
+  // the two faces on that edge changed, so the walk resumes one step back instead of from t.
+  // On meshes of long skinny triangles (architecture) a path runs dozens of faces deep, and
+  // restarting from t would make each path cost its length squared.
   bool lepp(uint32_t t, size_t budget, RefineStats& stats) {
+    path_.assign(1, t);
+    ++stats.faces_popped;
     for (;;) {
+      ++stats.walk_steps;
       if (tri_.size() >= budget) return true;  // the path may end the budget before t splits
-      uint32_t cur = t;
-      for (;;) {
-        int k = longest_edge(cur);
-        if (k < 0) return true;  // nothing splittable: t is done with
-        uint64_t e = edge_key(pos_of(cur, k), pos_of(cur, k + 1));
-        const EdgeFaces& ef = edges_.at(e);
-        if (ef.count == 2) {
-          uint32_t other = ef.f[0] == cur ? ef.f[1] : ef.f[0];
-          int k2 = longest_edge(other);
-          if (edge_key(pos_of(other, k2), pos_of(other, k2 + 1)) != e) {
-            cur = other;  // the neighbour has a longer edge: refine there first
-            continue;
-          }
+      if (path_.empty()) path_.push_back(t);
+      const uint32_t cur = path_.back();
+      const int k = longest_edge(cur);
+      if (k < 0) return true;  // nothing splittable in t (only t can lack a splittable edge)
+      const uint64_t e = edge_key(pos_of(cur, k), pos_of(cur, k + 1));
+      const EdgeFaces& ef = edges_.at(e);
+      if (ef.count == 2) {
+        const uint32_t other = ef.f[0] == cur ? ef.f[1] : ef.f[0];
+        const int k2 = longest_edge(other);
+        if (edge_key(pos_of(other, k2), pos_of(other, k2 + 1)) != e) {
+          path_.push_back(other);  // the neighbour has a longer edge: refine there first
+          continue;
         }
-        if (tri_.size() + ef.count > budget) return false;
-        bool hit_t = ef.f[0] == t || ef.f[1] == t;
-        split(e, stats);
-        if (hit_t) return true;
-        break;
       }
+      if (tri_.size() + ef.count > budget) return false;
+      const bool hit_t = ef.f[0] == t || ef.f[1] == t;
+      split(e, stats);
+      if (hit_t) return true;
+      path_.pop_back();  // cur was split; its predecessor's longest edge still leads here
     }
   }
 
@@ -302,6 +307,7 @@ class Refiner {
   std::unordered_map<uint64_t, EdgeFaces> edges_;
   std::vector<NewVertex> pending_;
   std::vector<uint32_t> dirty_;
+  std::vector<uint32_t> path_;
   IndexedHeap<Key>* heap_ = nullptr;
 };
 

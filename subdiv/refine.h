@@ -46,6 +46,8 @@ struct RefineOptions {
 struct RefineStats {
   size_t splits = 0, boundary_splits = 0, new_vertices = 0, batches = 0;
   size_t pre_refinement_splits = 0;
+  size_t faces_popped = 0;  //!< faces taken from the queue
+  size_t walk_steps = 0;    //!< faces visited along longest-edge paths (linear in splits + pops)
   size_t non_manifold_edges_kept = 0;  //!< never split
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
   double seconds_signal = 0, seconds_total = 0;

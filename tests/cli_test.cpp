@@ -157,3 +157,40 @@ TEST_F(Cli, RenderRejectsBadLightsCamerasAndSizesWithoutOutput) {
 
 }  // namespace
 }  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+TEST_F(Cli, EvalAndCompareWriteTheirTablesAndReports) {
+  std::string in = scene(), asset = dir.path("a.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "16", "--refine", "adaptive", "--budget", "400", "--report", dir.path("b.json")}), 0);
+  ASSERT_EQ(run({"eval", asset, "--source", in, "--points", "500", "--report", dir.path("e.json")}), 0);
+  ASSERT_EQ(run({"compare", in, "--budgets", "300,700", "--max-levels", "2", "--rays", "8", "--eval-points", "300",
+                 "--frame-size", "64,48", "--frame-rays", "8", "-o", dir.path("cmp/nested")}),
+            0);
+  testing::internal::GetCapturedStdout();
+  EXPECT_EQ(read_asset(asset).triangles.size(), 400u);
+  const std::string b = read_file_bytes(dir.path("b.json")), e = read_file_bytes(dir.path("e.json"));
+  for (const char* key : {"\"min_angle_before_deg\"", "\"min_angle_after_deg\"", "\"splits\"", "\"seconds_refine\""})
+    EXPECT_NE(b.find(key), std::string::npos) << key;
+  for (const char* key : {"\"rms_percent\"", "\"p95_percent\"", "\"noise_floor_percent\"", "\"reference_points\": 500",
+                          "\"reference_rays\": 128"})
+    EXPECT_NE(e.find(key), std::string::npos) << key;
+  const std::string csv = read_file_bytes(dir.path("cmp/nested/results.csv"));
+  // none, uniform levels 1 (328) and 2 (1312 > 700 * 5/4: not run), adaptive at 300, 328, 700 × 4 estimates.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 1 + 1 + 12);
+  EXPECT_NE(csv.find("uniform,,point,328,"), std::string::npos) << csv;
+  const std::string html = read_file_bytes(dir.path("cmp/nested/report.html"));
+  EXPECT_NE(html.find("<svg"), std::string::npos);
+  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"compare", in, "--budgets", "300,x", "-o", dir.path("c2")}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("z.ply"), "--refine", "adaptive"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("z.ply"), "--refine", "sideways"}), 1);
+  EXPECT_EQ(run({"eval", asset}), 2);
+  testing::internal::GetCapturedStderr();
+}
+
+}  // namespace
+}  // namespace prtsub

@@ -6,6 +6,7 @@
 #include "helpers.h"
 #include "prt/asset.h"
 #include "subdiv/ply.h"
+#include "subdiv/refine.h"
 #include "prt/transfer.h"
 #include "subdiv/mesh_io.h"
 
@@ -77,6 +78,27 @@ TEST_P(Scenes, BakesAndRendersWithTheAutoCamera) {
   const long covered = std::stol(json.substr(at + 18));
   EXPECT_GT(covered, 160 * 120 / 20) << GetParam().file;
   EXPECT_LE(covered, 160 * 120);
+}
+
+TEST(ScenesRefine, LongestEdgePathsStayLinearOnSkinnyArchitecture) {
+  // Sibenik's long needles make longest-edge paths dozens of faces deep. Resuming a path one
+  // step back after each split keeps the walk linear: at most two steps per split plus a few
+  // per popped face. (Restarting from the popped face made this run 200x slower.)
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  Mesh m = load_mesh(dir + "/sibenik.obj");
+  struct Curvy : RefinementSignal {
+    double edge_error(const EdgeView& e) const override { return std::abs(e.va[0] - e.vb[0]) + 1e-3 * (e.pa - e.pb).norm(); }
+    void compute_values(const std::vector<NewVertex>& b, const RowMatrixXd&, RowMatrixXd& out) override {
+      for (size_t i = 0; i < b.size(); ++i) out(static_cast<Eigen::Index>(i), 0) = std::sin(b[i].position.x()) * std::cos(b[i].position.z());
+    }
+  } signal;
+  RowMatrixXd v(static_cast<Eigen::Index>(m.num_vertices()), 1);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = std::sin(m.point(i).x()) * std::cos(m.point(i).z());
+  RefineStats st = refine_adaptive(m, v, signal, RefineOptions{2 * m.num_faces(), 256, 0});
+  EXPECT_EQ(m.num_faces(), 2 * 75284u);
+  EXPECT_GT(st.splits, 10000u);
+  EXPECT_LE(st.walk_steps, 2 * st.splits + 3 * st.faces_popped);
 }
 
 INSTANTIATE_TEST_SUITE_P(Shared, Scenes, ::testing::ValuesIn(kScenes), [](const auto& param_info) {

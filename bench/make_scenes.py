@@ -1,0 +1,96 @@
+#!/usr/bin/env python3
+"""Writes the two generated contact-shadow scenes of the refinement benchmark into DIR:
+spot_on_ground.obj (Spot's control mesh standing on a square ground quad) and
+icosphere_on_plane.obj (a level-1 icosphere resting on a two-triangle plane, as in the tests).
+
+usage: make_scenes.py SHARED_SCENES_DIR OUT_DIR"""
+import math
+import os
+import sys
+
+
+def read_obj(path):
+    verts, faces = [], []
+    for line in open(path):
+        p = line.split()
+        if not p:
+            continue
+        if p[0] == "v":
+            verts.append(tuple(float(x) for x in p[1:4]))
+        elif p[0] == "f":
+            faces.append(tuple(int(x.split("/")[0]) for x in p[1:]))
+    return verts, faces
+
+
+def write_obj(path, verts, faces, comment):
+    with open(path, "w") as f:
+        f.write("# " + comment + "\n")
+        for v in verts:
+            f.write("v %.17g %.17g %.17g\n" % v)
+        for face in faces:
+            f.write("f " + " ".join(str(i) for i in face) + "\n")
+
+
+def ground(verts, faces, up, half):
+    """Appends a two-triangle square facing +up under the mesh, `half` times its extent."""
+    lo = [min(v[k] for v in verts) for k in range(3)]
+    hi = [max(v[k] for v in verts) for k in range(3)]
+    c = [(a + b) / 2 for a, b in zip(lo, hi)]
+    r = half * max(hi[k] - lo[k] for k in range(3) if k != up)
+    a, b = [k for k in range(3) if k != up]
+    base = len(verts)
+    for sa, sb in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        p = [0.0, 0.0, 0.0]
+        p[up], p[a], p[b] = lo[up], c[a] + sa * r, c[b] + sb * r
+        verts.append(tuple(p))
+    quad = [base + 1, base + 2, base + 3, base + 4]
+    # Orientation: normal +up for (a, b, up) right-handed order.
+    right_handed = (a, b, up) in ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+    if not right_handed:
+        quad.reverse()
+    faces.append((quad[0], quad[1], quad[2]))
+    faces.append((quad[0], quad[2], quad[3]))
+
+
+def icosphere():
+    t = (1 + math.sqrt(5)) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    v = [tuple(x / math.sqrt(sum(c * c for c in p)) for x in p) for p in v]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),
+         (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
+         (8, 6, 7), (9, 8, 1)]
+    mid = {}
+
+    def midpoint(a, b):
+        key = (min(a, b), max(a, b))
+        if key not in mid:
+            p = [(x + y) / 2 for x, y in zip(v[a], v[b])]
+            n = math.sqrt(sum(c * c for c in p))
+            v.append(tuple(c / n for c in p))
+            mid[key] = len(v) - 1
+        return mid[key]
+
+    g = []
+    for a, b, c in f:
+        ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+        g += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+    return v, [(a + 1, b + 1, c + 1) for a, b, c in g]
+
+
+def main():
+    shared, out = sys.argv[1], sys.argv[2]
+    os.makedirs(out, exist_ok=True)
+    v, f = read_obj(os.path.join(shared, "spot_control_mesh.obj"))
+    ground(v, f, up=1, half=1.5)
+    write_obj(os.path.join(out, "spot_on_ground.obj"), v, f, "Spot (public domain, Keenan Crane) on a ground quad")
+    v, f = icosphere()
+    v = list(v)
+    v += [(-2.5, -2.5, -1.0), (2.5, -2.5, -1.0), (2.5, 2.5, -1.0), (-2.5, 2.5, -1.0)]
+    n = len(v)
+    f += [(n - 3, n - 2, n - 1), (n - 3, n - 1, n)]
+    write_obj(os.path.join(out, "icosphere_on_plane.obj"), v, f, "level-1 icosphere resting on a two-triangle plane")
+
+
+if __name__ == "__main__":
+    main()

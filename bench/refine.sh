@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The refinement measurements behind BENCHMARKS.md (issue 4). Takes ~10 minutes on 2 cores.
+#   bench/refine.sh BUILD_DIR SHARED_SCENES_DIR OUT_DIR
+# then: python3 bench/summarize.py OUT_DIR
+set -euo pipefail
+B="$1/prtsub"; S="$2"; O="$3"
+here="$(cd "$(dirname "$0")" && pwd)"
+mkdir -p "$O"
+python3 "$here/make_scenes.py" "$S" "$O/scenes"
+
+triangles() {  # input triangle count, from a one-ray bake's report
+  "$B" bake "$1" -o "$O/count.ply" --rays 1 --report "$O/count.json" > /dev/null
+  python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['triangles_out'])" "$O/count.json"
+}
+
+# 1. Which estimate wins, on every scene: adaptive at 2x and 4x the input (4x is uniform level 1).
+for f in "$S"/*.obj "$S"/*.ply; do
+  n=$(basename "${f%.*}"); F=$(triangles "$f")
+  echo "== estimates: $n ($F triangles)"
+  "$B" compare "$f" --budgets $((2 * F)),$((4 * F)) --max-levels 1 --rays 64 --eval-points 20000 \
+    --frame-size 320,240 --frame-rays 64 -o "$O/estimates/$n"
+done
+
+# 2. The targets: contact-shadow scenes at the triangle count of uniform level 3.
+for f in "$S/cornell_box.obj" "$S/house_on_site.obj" "$O/scenes/spot_on_ground.obj" "$O/scenes/icosphere_on_plane.obj"; do
+  n=$(basename "${f%.*}"); F=$(triangles "$f")
+  echo "== target: $n ($F triangles, level 3 = $((64 * F)))"
+  "$B" compare "$f" --budgets $((64 * F)) --max-levels 3 --rays 128 --eval-points 20000 -o "$O/targets/$n"
+done
+
+# 3. Refinement overhead and scaling: four budgets up to 200k on the teapot.
+for T in 25000 50000 100000 200000; do
+  "$B" bake "$S/teapot.obj" -o "$O/teapot_$T.ply" --refine adaptive --budget $T --rays 64 --report "$O/scaling_$T.json" > /dev/null
+done
+
+# 4. Batch size: time and error on the house at 64x its input.
+F=$(triangles "$S/house_on_site.obj")
+for b in 16 64 256 1024 4096; do
+  "$B" bake "$S/house_on_site.obj" -o "$O/house_b$b.ply" --refine adaptive --budget $((64 * F)) --rays 64 --batch $b \
+    --report "$O/batch_$b.json" > /dev/null
+  "$B" eval "$O/house_b$b.ply" --source "$S/house_on_site.obj" --points 20000 --report "$O/batch_eval_$b.json" > /dev/null
+done
+rm -f "$O/count.ply" "$O/count.json"
+echo "done: python3 bench/summarize.py $O"

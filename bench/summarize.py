@@ -1,0 +1,80 @@
+#!/usr/bin/env python3
+"""Prints the Markdown tables of BENCHMARKS.md (issue 4) from the outputs of bench/refine.sh.
+usage: summarize.py OUT_DIR"""
+import json
+import math
+import os
+import sys
+
+out = sys.argv[1]
+
+
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def rows(d):
+    return load(os.path.join(d, "results.json"))["runs"]
+
+
+print("### Estimates: RMS error (%) by scene and budget\n")
+est_dir = os.path.join(out, "estimates")
+estimates = ["relative", "shadow", "curvature", "length"]
+print("| scene | input | budget | uniform | " + " | ".join(estimates) + " | best |")
+print("|---|---:|---:|---:|" + "---:|" * len(estimates) + "---|")
+wins = {e: 0 for e in estimates}
+ratios = {e: [] for e in estimates}
+worse_than_uniform = []
+for scene in sorted(os.listdir(est_dir)):
+    rs = rows(os.path.join(est_dir, scene))
+    base = [r for r in rs if r["method"] == "none"][0]
+    uni = {r["triangles"]: r["rms_percent"] for r in rs if r["method"] == "uniform"}
+    counts = sorted({r["triangles"] for r in rs if r["method"] == "adaptive"})
+    for c in counts:
+        by = {r["estimate"]: r["rms_percent"] for r in rs if r["method"] == "adaptive" and r["triangles"] == c}
+        best = min(by, key=by.get)
+        wins[best] += 1
+        for e in estimates:
+            ratios[e].append(by[e] / by[best])
+        u = uni.get(c)
+        if u is not None and by["length"] > u:
+            worse_than_uniform.append((scene, c, by["length"], u))
+        cells = " | ".join(("**%.3f**" if e == best else "%.3f") % by[e] for e in estimates)
+        print("| %s | %d | %d | %s | %s | %s |" % (scene, base["triangles"], c, "%.3f" % u if u is not None else "", cells, best))
+print()
+print("Wins: " + ", ".join("%s %d" % (e, wins[e]) for e in estimates) + ".  ")
+print("Geometric mean of error relative to the best estimate: " +
+      ", ".join("%s %.3f" % (e, math.exp(sum(math.log(x) for x in ratios[e]) / len(ratios[e]))) for e in estimates) + ".")
+if worse_than_uniform:
+    print("\nAdaptive (length) worse than uniform: " + "; ".join("%s at %d: %.3f vs %.3f" % w for w in worse_than_uniform))
+
+print("\n### Targets: uniform level 3 against adaptive at the same count\n")
+print("| scene | triangles | uniform RMS % | adaptive (length) RMS % | ratio | best estimate | its ratio | noise floor % |")
+print("|---|---:|---:|---:|---:|---|---:|---:|")
+tdir = os.path.join(out, "targets")
+for scene in sorted(os.listdir(tdir)):
+    j = load(os.path.join(tdir, scene, "results.json"))
+    rs = j["runs"]
+    u3 = max((r for r in rs if r["method"] == "uniform"), key=lambda r: r["triangles"])
+    ad = {r["estimate"]: r["rms_percent"] for r in rs if r["method"] == "adaptive" and r["triangles"] == u3["triangles"]}
+    best = min(ad, key=ad.get)
+    print("| %s | %d | %.3f | %.3f | %.2f | %s | %.2f | %.3f |" % (scene, u3["triangles"], u3["rms_percent"], ad["length"],
+          ad["length"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
+
+print("\n### Refinement time at four budgets (teapot, 15,704 triangles in)\n")
+print("| budget | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns |")
+print("|---:|---:|---:|---:|---:|---:|")
+for T in (25000, 50000, 100000, 200000):
+    r = load(os.path.join(out, "scaling_%d.json" % T))
+    total, rays = r["seconds_refine"], r["seconds_refine_rays"]
+    over = total - rays
+    print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, rays, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
+
+print("\n### Batch size (house_on_site at 64x its input)\n")
+print("| batch | refine s | tracing s | batches | RMS % |")
+print("|---:|---:|---:|---:|---:|")
+for b in (16, 64, 256, 1024, 4096):
+    r = load(os.path.join(out, "batch_%d.json" % b))
+    e = load(os.path.join(out, "batch_eval_%d.json" % b))
+    print("| %d | %.3f | %.3f | %d | %.3f |" % (b, r["seconds_refine"], r["seconds_refine_rays"], r["batches"], e["rms_percent"]))
