@@ -2,9 +2,18 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace prtsub {
+
+void parse_size(const std::string& text, const std::string& option, int& width, int& height) {
+  int a = 0, b = 0;
+  char extra = 0;
+  if (std::sscanf(text.c_str(), "%d,%d%c", &a, &b, &extra) != 2 || a < 1 || b < 1 || a > 16384 || b > 16384)
+    throw UsageError(option + ": expected W,H with each 1 to 16384, got '" + text + "'");
+  width = a, height = b;
+}
 
 ArgParser::ArgParser(std::string command, std::string summary)
     : command_(std::move(command)), summary_(std::move(summary)) {}

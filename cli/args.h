@@ -17,6 +17,9 @@ class UsageError : public InputError {
   using InputError::InputError;
 };
 
+//! Parses "W,H" (each 1 to 16384) for `option`. \throw UsageError naming the option
+void parse_size(const std::string& text, const std::string& option, int& width, int& height);
+
 class ArgParser {
  public:
   ArgParser(std::string command, std::string summary);

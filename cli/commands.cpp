@@ -331,15 +331,6 @@ int cmd_bench(int argc, char** argv) {
 }
 
 
-// Parses W,H.
-void parse_size(const std::string& s, int& w, int& h) {
-  int a = 0, b = 0;
-  char extra = 0;
-  if (std::sscanf(s.c_str(), "%d,%d%c", &a, &b, &extra) != 2 || a < 1 || b < 1 || a > 16384 || b > 16384)
-    throw UsageError("--size: expected W,H with each 1 to 16384, got '" + s + "'");
-  w = a, h = b;
-}
-
 int cmd_render(int argc, char** argv) {
   std::string input, output, report, size = "800,600", camera_spec = "auto";
   std::vector<std::string> light_specs, rotations;
@@ -368,7 +359,7 @@ int cmd_render(int argc, char** argv) {
   if (output.empty()) throw UsageError("render: missing -o FRAME.png|FRAME.exr");
   if (light_specs.empty()) throw UsageError("render: missing --light SPEC");
   int width = 0, height = 0;
-  parse_size(size, width, height);
+  parse_size(size, "--size", width, height);
   check_writable(output);
   if (!report.empty()) check_writable(report);
 

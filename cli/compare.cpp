@@ -174,8 +174,7 @@ int cmd_compare(int argc, char** argv) {
   for (const std::string& e : split(estimates_s)) estimates.push_back(parse_estimate(e));
   if (light_specs.empty()) light_specs = {"sky", "sun:1,3,2"};
   int fw = 0, fh = 0;
-  if (std::sscanf(frame_size.c_str(), "%d,%d", &fw, &fh) != 2 || fw < 1 || fh < 1 || fw > 8192 || fh > 8192)
-    throw UsageError("--frame-size: expected W,H");
+  parse_size(frame_size, "--frame-size", fw, fh);
   {
     std::error_code ec;
     std::filesystem::create_directories(out_dir, ec);

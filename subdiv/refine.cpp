@@ -57,6 +57,8 @@ class Refiner {
     src_ = mesh.source_face;
     for (uint32_t f = 0; f < tri_.size(); ++f)
       for (int k = 0; k < 3; ++k) add_face(edge_key(pos_of(f, k), pos_of(f, k + 1)), f);
+    const double diag = mesh.positions.rows() ? bounds(mesh.positions).diagonal() : 0.0;
+    min_area_ = (1e-7 * diag) * (1e-7 * diag);  // the loader's zero-area threshold
   }
 
   size_t non_manifold_edges() const {
@@ -109,8 +111,13 @@ class Refiner {
       EdgeView v{pos_[vpos_[a]], pos_[vpos_[b]], nrm_[a], nrm_[b], &val_[size_t(a) * K_], &val_[size_t(b) * K_], K_};
       e += signal_.edge_error(v);
     }
-    if (longest_edge(f) < 0) return {-1, 0};
-    return {e, area(f)};
+    const double a = area(f);
+    // A face without area holds no surface error, whatever its edges say: a zero-area sliver
+    // along a long edge between a lit and a dark vertex would otherwise keep the queue busy
+    // forever, each split making two slivers with half the key. It is still split when a
+    // neighbour's path needs it, so the mesh stays conforming.
+    if (longest_edge(f) < 0 || !(a > min_area_)) return {-1, 0};
+    return {e, a};
   }
 
   Key length_key(uint32_t f, double max_edge) const {
@@ -185,7 +192,9 @@ class Refiner {
       if (ef.count == 2) {
         const uint32_t other = ef.f[0] == cur ? ef.f[1] : ef.f[0];
         const int k2 = longest_edge(other);
-        if (edge_key(pos_of(other, k2), pos_of(other, k2 + 1)) != e) {
+        // A neighbour without area has no quality to keep: split the shared edge now rather
+        // than follow the path along a degenerate (collinear) strip, which only makes more.
+        if (area(other) > min_area_ && edge_key(pos_of(other, k2), pos_of(other, k2 + 1)) != e) {
           path_.push_back(other);  // the neighbour has a longer edge: refine there first
           continue;
         }
@@ -300,6 +309,7 @@ class Refiner {
   RowMatrixXd* attr_out_;
   RefinementSignal& signal_;
   int K_ = 0, A_ = 0;
+  double min_area_ = 0;
   std::vector<Eigen::Vector3d> pos_, nrm_;
   std::vector<uint32_t> vpos_, src_;
   std::vector<double> val_, attr_;

@@ -265,3 +265,4 @@ TEST(Refine, MaxEdgePreRefinementBoundsEdgeLength) {
 
 }  // namespace
 }  // namespace prtsub
+
