@@ -31,6 +31,7 @@ done
 # 3. Refinement overhead and scaling: four budgets up to 200k on the teapot.
 for T in 25000 50000 100000 200000; do
   "$B" bake "$S/teapot.obj" -o "$O/teapot_$T.ply" --refine adaptive --budget $T --rays 64 --report "$O/scaling_$T.json" > /dev/null
+  "$B" bake "$S/teapot.obj" -o "$O/teapot_$T.ply" --refine adaptive --budget $T --report "$O/scaling256_$T.json" > /dev/null
 done
 
 # 4. Batch size: time and error on the house at 64x its input.

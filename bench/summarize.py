@@ -62,14 +62,15 @@ for scene in sorted(os.listdir(tdir)):
     print("| %s | %d | %.3f | %.3f | %.2f | %s | %.2f | %.3f |" % (scene, u3["triangles"], u3["rms_percent"], ad["length"],
           ad["length"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
 
-print("\n### Refinement time at four budgets (teapot, 15,704 triangles in)\n")
-print("| budget | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns |")
-print("|---:|---:|---:|---:|---:|---:|")
-for T in (25000, 50000, 100000, 200000):
-    r = load(os.path.join(out, "scaling_%d.json" % T))
-    total, rays = r["seconds_refine"], r["seconds_refine_rays"]
-    over = total - rays
-    print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, rays, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
+for name, rays in (("scaling", 64), ("scaling256", 256)):
+    print("\n### Refinement time at four budgets (teapot, 15,704 triangles in, %d rays per vertex)\n" % rays)
+    print("| budget | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for T in (25000, 50000, 100000, 200000):
+        r = load(os.path.join(out, "%s_%d.json" % (name, T)))
+        total, traced = r["seconds_refine"], r["seconds_refine_rays"]
+        over = total - traced
+        print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, traced, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
 
 print("\n### Batch size (house_on_site at 64x its input)\n")
 print("| batch | refine s | tracing s | batches | RMS % |")

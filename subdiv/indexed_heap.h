@@ -3,6 +3,7 @@
 // is a function of the keys alone (deterministic refinement).
 #pragma once
 
+#include <algorithm>
 #include <cassert>
 #include <cstdint>
 #include <utility>
@@ -13,6 +14,11 @@ namespace prtsub {
 template <class Key>
 class IndexedHeap {
  public:
+  //! Room for ids below n without reallocation.
+  void reserve(size_t n) {
+    heap_.reserve(n);
+    if (slot_.size() < n) slot_.resize(n, kAbsent), keys_.resize(n);
+  }
   bool empty() const { return heap_.empty(); }
   size_t size() const { return heap_.size(); }
   bool contains(uint32_t id) const { return id < slot_.size() && slot_[id] != kAbsent; }
@@ -22,8 +28,8 @@ class IndexedHeap {
   //! Inserts id, or updates its key if present.
   void push(uint32_t id, const Key& key) {
     if (id >= slot_.size()) {
-      slot_.resize(id + 1, kAbsent);
-      keys_.resize(id + 1);
+      slot_.resize(std::max<size_t>(id + 1, 2 * slot_.size()), kAbsent);
+      keys_.resize(slot_.size());
     }
     keys_[id] = key;
     if (slot_[id] == kAbsent) {

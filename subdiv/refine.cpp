@@ -28,6 +28,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "subdiv/edge_table.h"
 #include "subdiv/indexed_heap.h"
 
 namespace prtsub {
@@ -55,6 +56,7 @@ class Refiner {
     if (A_) attr_.assign(attributes->data(), attributes->data() + attributes->size());
     tri_ = mesh.triangles;
     src_ = mesh.source_face;
+    edges_ = EdgeTable<EdgeFaces>(tri_.size() * 3 / 2);
     for (uint32_t f = 0; f < tri_.size(); ++f)
       for (int k = 0; k < 3; ++k) add_face(edge_key(pos_of(f, k), pos_of(f, k + 1)), f);
     const double diag = mesh.positions.rows() ? bounds(mesh.positions).diagonal() : 0.0;
@@ -63,16 +65,32 @@ class Refiner {
 
   size_t non_manifold_edges() const {
     size_t n = 0;
-    for (const auto& [k, e] : edges_) n += e.count > 2;
+    edges_.for_each([&](uint64_t, const EdgeFaces& e) { n += e.count > 2; });
     return n;
   }
   size_t faces() const { return tri_.size(); }
+
+  // Everything grows with every split; sizing it for the budget once avoids repeated copies
+  // and page faults (a split adds at most two faces and, at a crease, two render vertices).
+  void reserve(size_t budget) {
+    const size_t extra = budget > tri_.size() ? budget - tri_.size() : 0;
+    tri_.reserve(budget);
+    src_.reserve(budget);
+    pos_.reserve(pos_.size() + extra);
+    vpos_.reserve(vpos_.size() + extra);
+    nrm_.reserve(nrm_.size() + extra);
+    val_.reserve(val_.size() + extra * static_cast<size_t>(K_));
+    attr_.reserve(attr_.size() + extra * static_cast<size_t>(A_));
+    edges_.reserve(budget * 3 / 2 + 16);
+    heap_capacity_ = budget;
+  }
 
   // Runs batches until the budget is met or nothing is left to split. `key_of` gives a face's
   // key, or nullopt-like (first < 0) when it should not be split.
   template <class KeyFn>
   void run(size_t budget, size_t batch, KeyFn&& key_of, RefineStats& stats) {
     IndexedHeap<Key> heap;
+    heap.reserve(heap_capacity_);
     for (uint32_t f = 0; f < tri_.size(); ++f) {
       Key k = key_of(f);
       if (k.first >= 0) heap.push(f, k);
@@ -310,11 +328,12 @@ class Refiner {
   RefinementSignal& signal_;
   int K_ = 0, A_ = 0;
   double min_area_ = 0;
+  size_t heap_capacity_ = 0;
   std::vector<Eigen::Vector3d> pos_, nrm_;
   std::vector<uint32_t> vpos_, src_;
   std::vector<double> val_, attr_;
   std::vector<Triangle> tri_;
-  std::unordered_map<uint64_t, EdgeFaces> edges_;
+  EdgeTable<EdgeFaces> edges_;
   std::vector<NewVertex> pending_;
   std::vector<uint32_t> dirty_;
   std::vector<uint32_t> path_;
@@ -349,6 +368,7 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
   }
   Refiner r(mesh, values, attributes, signal);
   stats.non_manifold_edges_kept = r.non_manifold_edges();
+  r.reserve(options.budget);
   const size_t batch = std::max<size_t>(options.batch, 1);
   if (options.max_edge > 0) {
     r.run(options.budget, batch, [&](uint32_t f) { return r.length_key(f, options.max_edge); }, stats);
