@@ -34,12 +34,14 @@ for T in 25000 50000 100000 200000; do
   "$B" bake "$S/teapot.obj" -o "$O/teapot_$T.ply" --refine adaptive --budget $T --report "$O/scaling256_$T.json" > /dev/null
 done
 
-# 4. Batch size: time and error on the house at 64x its input.
-F=$(triangles "$S/house_on_site.obj")
-for b in 16 64 256 1024 4096; do
-  "$B" bake "$S/house_on_site.obj" -o "$O/house_b$b.ply" --refine adaptive --budget $((64 * F)) --rays 64 --batch $b \
-    --report "$O/batch_$b.json" > /dev/null
-  "$B" eval "$O/house_b$b.ply" --source "$S/house_on_site.obj" --points 20000 --report "$O/batch_eval_$b.json" > /dev/null
+# 4. Batch size: time and error at 64x the input on two contact-shadow scenes.
+for f in "$S/house_on_site.obj" "$O/scenes/spot_on_ground.obj"; do
+  n=$(basename "${f%.*}"); F=$(triangles "$f")
+  for b in 16 64 256 1024 4096; do
+    "$B" bake "$f" -o "$O/${n}_b$b.ply" --refine adaptive --budget $((64 * F)) --rays 64 --batch $b \
+      --report "$O/batch_${n}_$b.json" > /dev/null
+    "$B" eval "$O/${n}_b$b.ply" --source "$f" --points 20000 --report "$O/batch_eval_${n}_$b.json" > /dev/null
+  done
 done
 rm -f "$O/count.ply" "$O/count.json"
 echo "done: python3 bench/summarize.py $O"

@@ -72,10 +72,11 @@ for name, rays in (("scaling", 64), ("scaling256", 256)):
         over = total - traced
         print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, traced, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
 
-print("\n### Batch size (house_on_site at 64x its input)\n")
-print("| batch | refine s | tracing s | batches | RMS % |")
-print("|---:|---:|---:|---:|---:|")
-for b in (16, 64, 256, 1024, 4096):
-    r = load(os.path.join(out, "batch_%d.json" % b))
-    e = load(os.path.join(out, "batch_eval_%d.json" % b))
-    print("| %d | %.3f | %.3f | %d | %.3f |" % (b, r["seconds_refine"], r["seconds_refine_rays"], r["batches"], e["rms_percent"]))
+print("\n### Batch size (64x the input, 64 rays per vertex)\n")
+print("| scene | batch | refine s | tracing s | batches | RMS % |")
+print("|---|---:|---:|---:|---:|---:|")
+for n in ("house_on_site", "spot_on_ground"):
+    for b in (16, 64, 256, 1024, 4096):
+        r = load(os.path.join(out, "batch_%s_%d.json" % (n, b)))
+        e = load(os.path.join(out, "batch_eval_%s_%d.json" % (n, b)))
+        print("| %s | %d | %.3f | %.3f | %d | %.3f |" % (n, b, r["seconds_refine"], r["seconds_refine_rays"], r["batches"], e["rms_percent"]))
