@@ -11,7 +11,6 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "prt/render.h"
 #include "prt/sampling.h"
 #include "prt/sh.h"
 #include "subdiv/exceptions.h"
@@ -50,7 +49,11 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
     double u = rng.uniform(), v = rng.uniform();
     if (u + v > 1) u = 1 - u, v = 1 - v;
     const Triangle& t = src.triangles[f];
-    ref.points.row(i) = shading_point(corners, src.normals, t, u, v).transpose();
+    // The point on the surface itself, as the bake samples vertices: transfer is defined at
+    // surface points, and a refined asset must converge to this reference. (render --reference
+    // lifts points towards the smooth surface for display; here that would leave errors near
+    // contacts that no refinement of the flat surface could remove.)
+    ref.points.row(i) = (1 - u - v) * corners.row(t[0]) + u * corners.row(t[1]) + v * corners.row(t[2]);
     Eigen::Vector3d nrm = (1 - u - v) * src.normals.row(t[0]) + u * src.normals.row(t[1]) + v * src.normals.row(t[2]);
     if (!(nrm.norm() > 1e-12)) nrm = (src.point(t[1]) - src.point(t[0])).cross(src.point(t[2]) - src.point(t[0]));
     if (!(nrm.norm() > 0)) nrm = Eigen::Vector3d::UnitZ();
