@@ -120,7 +120,7 @@ TEST(Eval, RefinementLowersErrorAndAdaptiveBeatsUniformOnAContactShadow) {
   EXPECT_LT(e2, e0);
   EXPECT_LT(e3, e2);
   EXPECT_LT(ea, e3) << "adaptive " << ea << "% vs uniform " << e3 << "% at " << level3 << " triangles";
-  EXPECT_GT(e3, 10 * ref.noise_floor * 100);  // the comparison is far above the reference's noise
+  EXPECT_GT(e3 - ea, 3 * ref.noise_floor * 100);  // adaptive's lead is well above the reference's noise
 }
 
 TEST(Bake, AdaptiveRefinementIsIdenticalForAnyThreadCount) {
