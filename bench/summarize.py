@@ -20,7 +20,7 @@ def rows(d):
 
 print("### Estimates: RMS error (%) by scene and budget\n")
 est_dir = os.path.join(out, "estimates")
-estimates = ["relative", "shadow", "curvature", "length"]
+estimates = ["relative", "shadow", "curvature", "length", "probe"]
 print("| scene | input | budget | uniform | " + " | ".join(estimates) + " | best |")
 print("|---|---:|---:|---:|" + "---:|" * len(estimates) + "---|")
 wins = {e: 0 for e in estimates}
@@ -38,8 +38,8 @@ for scene in sorted(os.listdir(est_dir)):
         for e in estimates:
             ratios[e].append(by[e] / by[best])
         u = uni.get(c)
-        if u is not None and by["length"] > u:
-            worse_than_uniform.append((scene, c, by["length"], u))
+        if u is not None and by["probe"] > u:
+            worse_than_uniform.append((scene, c, by["probe"], u))
         cells = " | ".join(("**%.3f**" if e == best else "%.3f") % by[e] for e in estimates)
         print("| %s | %d | %d | %s | %s | %s |" % (scene, base["triangles"], c, "%.3f" % u if u is not None else "", cells, best))
 print()
@@ -47,11 +47,11 @@ print("Wins: " + ", ".join("%s %d" % (e, wins[e]) for e in estimates) + ".  ")
 print("Geometric mean of error relative to the best estimate: " +
       ", ".join("%s %.3f" % (e, math.exp(sum(math.log(x) for x in ratios[e]) / len(ratios[e]))) for e in estimates) + ".")
 if worse_than_uniform:
-    print("\nAdaptive (length) worse than uniform: " + "; ".join("%s at %d: %.3f vs %.3f" % w for w in worse_than_uniform))
+    print("\nAdaptive (probe) worse than uniform: " + "; ".join("%s at %d: %.3f vs %.3f" % w for w in worse_than_uniform))
 
 print("\n### Targets: uniform level 3 against adaptive at the same count\n")
-print("| scene | triangles | uniform RMS % | adaptive (length) RMS % | ratio | best estimate | its ratio | noise floor % |")
-print("|---|---:|---:|---:|---:|---|---:|---:|")
+print("| scene | triangles | uniform RMS % | adaptive (length) RMS % | ratio | adaptive (probe) RMS % | ratio | best estimate | its ratio | noise floor % |")
+print("|---|---:|---:|---:|---:|---:|---:|---|---:|---:|")
 tdir = os.path.join(out, "targets")
 for scene in sorted(os.listdir(tdir)):
     j = load(os.path.join(tdir, scene, "results.json"))
@@ -59,8 +59,8 @@ for scene in sorted(os.listdir(tdir)):
     u3 = max((r for r in rs if r["method"] == "uniform"), key=lambda r: r["triangles"])
     ad = {r["estimate"]: r["rms_percent"] for r in rs if r["method"] == "adaptive" and r["triangles"] == u3["triangles"]}
     best = min(ad, key=ad.get)
-    print("| %s | %d | %.3f | %.3f | %.2f | %s | %.2f | %.3f |" % (scene, u3["triangles"], u3["rms_percent"], ad["length"],
-          ad["length"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
+    print("| %s | %d | %.3f | %.3f | %.2f | %.3f | %.2f | %s | %.2f | %.3f |" % (scene, u3["triangles"], u3["rms_percent"], ad["length"],
+          ad["length"] / u3["rms_percent"], ad["probe"], ad["probe"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
 
 for name, rays in (("scaling", 64), ("scaling256", 256)):
     print("\n### Refinement time at four budgets (teapot, 15,704 triangles in, %d rays per vertex)\n" % rays)

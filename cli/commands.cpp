@@ -99,7 +99,7 @@ int cmd_bake(int argc, char** argv) {
   args.alias("-o", "--output");
   args.option("--refine", "none|adaptive|uniform", "refinement [default none]", &b.refine);
   args.option("--budget", "T", "adaptive: output triangle count", &budget, 0, 1 << 30);
-  args.option("--estimate", "relative|shadow|curvature|length", "adaptive: edge error estimate [default length]", &estimate);
+  args.option("--estimate", "relative|shadow|curvature|length|probe", "adaptive: edge error estimate [default length]", &estimate);
   args.option("--max-edge", "L", "adaptive: first split edges longer than L (0: off)", &b.max_edge, 0.0, 1e30);
   int batch = 256;
   args.option("--batch", "B", "adaptive: faces split per Embree batch", &batch, 1, 1 << 20);

@@ -7,6 +7,13 @@
 // Δ over a strip whose area grows with the edge's length, so ranking by ‖Δt‖·|ab| (rather
 // than ‖Δt‖ alone) spends splits where they buy the most error per triangle, instead of on
 // tiny edges at a sharp shadow. BENCHMARKS.md has the measurement that chose the default.
+//
+// "Probe" is ours too. A large input face whose corners are all lit can hide a shadow inside
+// (the floor under a table, a slab under a house): no edge estimate sees it. Before the
+// adaptive pass, each input face's transfer is traced at its centroid; its distance from the
+// corners' mean, times sqrt(3·area) (the edge-length scale of a triangle of that area,
+// summed over three edges), joins the face's key until the face is first split. After that
+// the new vertices themselves see the shadow. Cost: one transfer per input face.
 #include "prt/refine_signal.h"
 
 #include <cmath>
@@ -20,7 +27,8 @@ EdgeEstimate parse_estimate(const std::string& name) {
   if (name == "shadow") return EdgeEstimate::Shadow;
   if (name == "curvature") return EdgeEstimate::Curvature;
   if (name == "length") return EdgeEstimate::Length;
-  throw InputError("--estimate must be relative, shadow, curvature or length, got '" + name + "'");
+  if (name == "probe") return EdgeEstimate::Probe;
+  throw InputError("--estimate must be relative, shadow, curvature, length or probe, got '" + name + "'");
 }
 
 const char* estimate_name(EdgeEstimate e) {
@@ -29,6 +37,7 @@ const char* estimate_name(EdgeEstimate e) {
     case EdgeEstimate::Shadow: return "shadow";
     case EdgeEstimate::Curvature: return "curvature";
     case EdgeEstimate::Length: return "length";
+    case EdgeEstimate::Probe: return "probe";
   }
   return "?";
 }
@@ -55,7 +64,8 @@ double TransferSignal::edge_error(const EdgeView& e) const {
       const double angle = std::acos(std::clamp(e.na.dot(e.nb), -1.0, 1.0));
       return diff / std::max(angle, options_.curvature_guard_deg * M_PI / 180);
     }
-    case EdgeEstimate::Length: return diff * (e.pa - e.pb).norm();
+    case EdgeEstimate::Length:
+    case EdgeEstimate::Probe: return diff * (e.pa - e.pb).norm();
   }
   return diff;
 }
@@ -77,6 +87,35 @@ void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const R
   TransferStats stats;
   values = shadowed_transfer(scene_, points, normals, o, &stats, {}, &offsets);
   rays_ += stats.rays;
+}
+
+}  // namespace prtsub
+
+namespace prtsub {
+
+void TransferSignal::probe_faces(const std::vector<FaceProbe>& faces, std::vector<double>& extra) {
+  extra.clear();
+  if (options_.estimate != EdgeEstimate::Probe || faces.empty()) return;
+  RowMatrixX3d points(static_cast<Eigen::Index>(faces.size()), 3), normals(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t i = 0; i < faces.size(); ++i) {
+    points.row(static_cast<Eigen::Index>(i)) = faces[i].centroid.transpose();
+    normals.row(static_cast<Eigen::Index>(i)) = faces[i].normal.transpose();
+  }
+  TransferOptions o = options_.transfer;
+  o.stream_offset = uint64_t(1) << 40;  // streams apart from every vertex's
+  TransferStats stats;
+  RowMatrixXd t = shadowed_transfer(scene_, points, normals, o, &stats);
+  rays_ += stats.rays;
+  extra.resize(faces.size());
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const FaceProbe& f = faces[i];
+    double d2 = 0;
+    for (int k = 0; k < f.K; ++k) {
+      const double d = t(static_cast<Eigen::Index>(i), k) - (f.va[k] + f.vb[k] + f.vc[k]) / 3;
+      d2 += d * d;
+    }
+    extra[i] = std::sqrt(d2) * std::sqrt(3 * f.area);
+  }
 }
 
 }  // namespace prtsub

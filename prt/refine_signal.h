@@ -15,6 +15,7 @@ enum class EdgeEstimate {
   Shadow,     //!< (2) ‖Δt‖
   Curvature,  //!< (3) ‖Δt‖ / max(angle(n_a, n_b), θ0)
   Length,     //!< ours: ‖Δt‖ · |ab|, the edge's share of the surface integral of error
+  Probe,      //!< ours: Length, plus each input face's transfer probed at its centroid
 };
 
 EdgeEstimate parse_estimate(const std::string& name);
@@ -32,6 +33,7 @@ class TransferSignal : public RefinementSignal {
   TransferSignal(const RayScene& scene, const TransferSignalOptions& options);
   double edge_error(const EdgeView& edge) const override;
   void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd& parent_values, RowMatrixXd& values) override;
+  void probe_faces(const std::vector<FaceProbe>& faces, std::vector<double>& extra) override;
   uint64_t rays() const { return rays_; }
 
  private:

@@ -135,7 +135,24 @@ class Refiner {
     // forever, each split making two slivers with half the key. It is still split when a
     // neighbour's path needs it, so the mesh stays conforming.
     if (longest_edge(f) < 0 || !(a > min_area_)) return {-1, 0};
+    if (f < extra_.size()) e += extra_[f];
     return {e, a};
+  }
+
+  // Asks the signal for interior probes of every current face (see RefinementSignal).
+  void probe(RefineStats& stats) {
+    std::vector<FaceProbe> faces(tri_.size());
+    for (uint32_t f = 0; f < tri_.size(); ++f) {
+      const Triangle& t = tri_[f];
+      Eigen::Vector3d n = nrm_[t[0]] + nrm_[t[1]] + nrm_[t[2]];
+      if (!(n.norm() > 1e-12)) n = nrm_[t[0]];
+      faces[f] = {(pos_[vpos_[t[0]]] + pos_[vpos_[t[1]]] + pos_[vpos_[t[2]]]) / 3, n.normalized(), area(f),
+                  &val_[size_t(t[0]) * K_], &val_[size_t(t[1]) * K_], &val_[size_t(t[2]) * K_], K_};
+    }
+    auto t0 = std::chrono::steady_clock::now();
+    signal_.probe_faces(faces, extra_);
+    stats.seconds_signal += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats.probed_faces = extra_.size();
   }
 
   Key length_key(uint32_t f, double max_edge) const {
@@ -284,6 +301,7 @@ class Refiner {
       add_face(edge_key(m, pc), g);
       replace_face(edge_key(pb, pc), f, g);
       if (heap_) heap_->remove(f);
+      if (f < extra_.size()) extra_[f] = 0;  // a probe speaks for the face it was taken in only
       dirty_.push_back(f);
       dirty_.push_back(g);
     }
@@ -329,6 +347,7 @@ class Refiner {
   int K_ = 0, A_ = 0;
   double min_area_ = 0;
   size_t heap_capacity_ = 0;
+  std::vector<double> extra_;  // probe keys of faces not yet split
   std::vector<Eigen::Vector3d> pos_, nrm_;
   std::vector<uint32_t> vpos_, src_;
   std::vector<double> val_, attr_;
@@ -374,7 +393,10 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
     r.run(options.budget, batch, [&](uint32_t f) { return r.length_key(f, options.max_edge); }, stats);
     stats.pre_refinement_splits = stats.splits;
   }
-  if (stats.warning.empty()) r.run(options.budget, batch, [&](uint32_t f) { return r.error_key(f); }, stats);
+  if (stats.warning.empty()) {
+    r.probe(stats);
+    r.run(options.budget, batch, [&](uint32_t f) { return r.error_key(f); }, stats);
+  }
   r.write_back();
   stats.min_angle_after_deg = min_angle_deg(mesh);
   stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

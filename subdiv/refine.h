@@ -25,10 +25,27 @@ struct NewVertex {
   Eigen::Vector3d position, normal;
 };
 
+//! A face of the input, as the signal's optional interior probe sees it.
+struct FaceProbe {
+  Eigen::Vector3d centroid, normal;  //!< normal: the corners' normals averaged
+  double area;
+  const double* va;  //!< the corners' signal (K values each)
+  const double* vb;
+  const double* vc;
+  int K;
+};
+
 //! What refinement asks of the signal.
 class RefinementSignal {
  public:
   virtual ~RefinementSignal() = default;
+  //! Optional: an extra key for each face present when the adaptive pass starts, kept until the
+  //! face is first split. Estimates see only vertices; a probe inside a large face can see a
+  //! shadow that none of its corners does. Leave `extra` empty for none.
+  virtual void probe_faces(const std::vector<FaceProbe>& faces, std::vector<double>& extra) {
+    (void)faces;
+    extra.clear();
+  }
   //! Error estimate of an edge; larger is worse; must be finite and >= 0.
   virtual double edge_error(const EdgeView& edge) const = 0;
   //! Fills one row of `values` (#batch by K, row-major) per new vertex. Called once per batch
@@ -47,6 +64,7 @@ struct RefineStats {
   size_t splits = 0, boundary_splits = 0, new_vertices = 0, batches = 0;
   size_t pre_refinement_splits = 0;
   size_t faces_popped = 0;  //!< faces taken from the queue
+  size_t probed_faces = 0;  //!< faces the signal probed inside
   size_t walk_steps = 0;    //!< faces visited along longest-edge paths (linear in splits + pops)
   size_t non_manifold_edges_kept = 0;  //!< never split
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
