@@ -178,8 +178,8 @@ TEST_F(Cli, EvalAndCompareWriteTheirTablesAndReports) {
                           "\"reference_rays\": 128"})
     EXPECT_NE(e.find(key), std::string::npos) << key;
   const std::string csv = read_file_bytes(dir.path("cmp/nested/results.csv"));
-  // none, uniform levels 1 (328) and 2 (1312 > 700 * 5/4: not run), adaptive at 300, 328, 700 × 4 estimates.
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 1 + 1 + 12);
+  // none, uniform levels 1 (328) and 2 (1312 > 700 * 5/4: not run), adaptive at 300, 328, 700 × 5 estimates.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 1 + 1 + 15);
   EXPECT_NE(csv.find("uniform,,point,328,"), std::string::npos) << csv;
   const std::string html = read_file_bytes(dir.path("cmp/nested/report.html"));
   EXPECT_NE(html.find("<svg"), std::string::npos);
