@@ -89,7 +89,7 @@ void add_common(ArgParser& args, CommonOptions& c) {
 int cmd_bake(int argc, char** argv) {
   CommonOptions c;
   BakeSettings b;
-  std::string output, estimate = "length", scheme = "linear";
+  std::string output, estimate = "probe", scheme = "linear";
   int budget = 0;
   ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset (binary PLY).\n"
                          "With --refine, first refines the mesh: adaptively to a triangle budget where the transfer\n"
@@ -99,7 +99,7 @@ int cmd_bake(int argc, char** argv) {
   args.alias("-o", "--output");
   args.option("--refine", "none|adaptive|uniform", "refinement [default none]", &b.refine);
   args.option("--budget", "T", "adaptive: output triangle count", &budget, 0, 1 << 30);
-  args.option("--estimate", "relative|shadow|curvature|length|probe", "adaptive: edge error estimate [default length]", &estimate);
+  args.option("--estimate", "relative|shadow|curvature|length|probe", "adaptive: edge error estimate [default probe]", &estimate);
   args.option("--max-edge", "L", "adaptive: first split edges longer than L (0: off)", &b.max_edge, 0.0, 1e30);
   int batch = 256;
   args.option("--batch", "B", "adaptive: faces split per Embree batch", &batch, 1, 1 << 20);

@@ -245,7 +245,7 @@ int cmd_compare(int argc, char** argv) {
     std::fflush(stdout);
     if (row.triangles == frame_count || (s.refine == "uniform" && row.triangles == frame_count)) {
       const std::string key = s.refine == "uniform" ? "uniform" : std::string("adaptive ") + estimate_name(s.estimate);
-      if (s.refine == "uniform" || s.estimate == EdgeEstimate::Length) keep.emplace(key, std::move(r));
+      if (s.refine == "uniform" || s.estimate == BakeSettings{}.estimate) keep.emplace(key, std::move(r));
     }
   }
 
@@ -271,7 +271,7 @@ int cmd_compare(int argc, char** argv) {
   // Frames at the uniform level-3 count (or the first budget): uniform, adaptive, reference.
   std::map<std::string, std::string> images;  // caption -> PNG bytes
   std::string frame_note;
-  if (keep.count("uniform") || keep.count("adaptive length")) {
+  if (!keep.empty()) {
     ShLight light = parse_light(light_specs[0], topt.order);
     for (size_t i = 1; i < light_specs.size(); ++i) light += parse_light(light_specs[i], topt.order);
     const Camera cam = auto_camera(bounds(source.positions), fw, fh);

@@ -20,7 +20,7 @@ struct BakeSettings {
   TransferOptions transfer;
   std::string refine = "none";  //!< none, adaptive or uniform
   size_t budget = 0;            //!< adaptive: output triangles
-  EdgeEstimate estimate = EdgeEstimate::Length;
+  EdgeEstimate estimate = EdgeEstimate::Probe;
   double max_edge = 0;          //!< adaptive: pre-refine edges longer than this
   size_t batch = 256;           //!< adaptive: faces popped per Embree batch
   UniformOptions uniform;       //!< uniform: levels and scheme

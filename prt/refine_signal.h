@@ -22,7 +22,7 @@ EdgeEstimate parse_estimate(const std::string& name);
 const char* estimate_name(EdgeEstimate e);
 
 struct TransferSignalOptions {
-  EdgeEstimate estimate = EdgeEstimate::Length;
+  EdgeEstimate estimate = EdgeEstimate::Probe;
   double curvature_guard_deg = 10;  //!< θ0 of the curvature estimate
   TransferOptions transfer;        //!< order, rays, seed, threads of new vertices' transfer
 };
