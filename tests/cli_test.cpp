@@ -12,12 +12,7 @@
 namespace prtsub {
 namespace {
 
-int run(std::vector<std::string> args) {
-  args.insert(args.begin(), "prtsub");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  return run_cli(static_cast<int>(argv.size()), argv.data());
-}
+int run(std::vector<std::string> args) { return test::run_prtsub(std::move(args)); }
 
 class Cli : public ::testing::Test {
  protected:

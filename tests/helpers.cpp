@@ -1,5 +1,7 @@
 #include "helpers.h"
 
+#include "cli/commands.h"
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -133,6 +135,13 @@ bool file_exists(const std::string& path) { return std::filesystem::exists(path)
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
+}
+
+int run_prtsub(std::vector<std::string> args) {
+  args.insert(args.begin(), "prtsub");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  return run_cli(static_cast<int>(argv.size()), argv.data());
 }
 
 std::string shared_scenes() {

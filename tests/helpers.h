@@ -39,6 +39,9 @@ void write_text(const std::string& path, const std::string& text);
 //! Directory of ../shared/scenes, or "" when this clone has none.
 std::string shared_scenes();
 
+//! Runs a prtsub command line in-process ("prtsub" is prepended); returns its exit status.
+int run_prtsub(std::vector<std::string> args);
+
 }  // namespace prtsub::test
 
 namespace prtsub::test {

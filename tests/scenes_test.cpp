@@ -15,12 +15,9 @@
 namespace prtsub {
 namespace {
 
-int run(std::vector<std::string> args) {
-  args.insert(args.begin(), "prtsub");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
+int run(std::vector<std::string> args) {  // quiet: the summaries of ten scenes are noise here
   testing::internal::CaptureStdout();
-  int rc = run_cli(static_cast<int>(argv.size()), argv.data());
+  int rc = test::run_prtsub(std::move(args));
   testing::internal::GetCapturedStdout();
   return rc;
 }
