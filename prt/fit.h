@@ -1,0 +1,74 @@
+// Vertex values from surface samples: point sampling's alternatives (Kavan, Bargteil, Sloan
+// 2011). The fit sees only the mesh, the samples and their values, so it is testable without rays.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <string>
+
+#include "prt/surface_samples.h"
+
+namespace prtsub {
+
+using SparseMatrixd = Eigen::SparseMatrix<double>;
+
+enum class FitMethod { Point, Average, LeastSquares };
+enum class Regularizer { Edge, Gradient };
+enum class MassMatrix { Analytic, Sampled };
+
+FitMethod parse_fit_method(const std::string& name);        //!< point, average, lsq
+Regularizer parse_regularizer(const std::string& name);     //!< edge, gradient
+MassMatrix parse_mass_matrix(const std::string& name);      //!< analytic, sampled
+const char* fit_method_name(FitMethod m);
+const char* regularizer_name(Regularizer r);
+const char* mass_matrix_name(MassMatrix m);
+
+struct FitOptions {
+  FitMethod method = FitMethod::LeastSquares;
+  Regularizer regularizer = Regularizer::Edge;
+  double alpha = 0.1;  //!< weight of the regulariser; 0 is the plain least-squares optimum
+  MassMatrix mass = MassMatrix::Analytic;
+  int threads = 0;     //!< for the solves of many right-hand sides; 0: every core
+};
+
+struct FitStats {
+  size_t unknowns = 0;             //!< render vertices
+  size_t unsupported = 0;          //!< vertices no sampled face touches: they keep the prior
+  size_t system_nonzeros = 0;      //!< of A + αR (both triangles)
+  size_t factor_nonzeros = 0;      //!< of the Cholesky factor L
+  double solve_memory_mib = 0;     //!< system plus factor plus right-hand sides, as stored
+  double stabilizer = 0;           //!< λ of the pull towards the prior that was needed (0: none)
+  double seconds_assemble = 0, seconds_factor = 0, seconds_solve = 0;
+  std::string warning;             //!< non-empty when the fallback was used
+};
+
+//! A: ∫ h_i h_j over faces with samples (analytic: area/6 on the diagonal, area/12 off it;
+//! sampled: Σ_j w_j h_i(p_j) h_k(p_j), what the samples alone can see). #V by #V.
+SparseMatrixd mass_matrix(const Mesh& mesh, const SurfaceSamples& samples, MassMatrix kind);
+
+//! R_grad = Σ_t a_t² G_tᵀ G_t, G_t the 3×#V gradient of the hat functions on face t: the
+//! area-scaled gradient energy of equation (12). Annihilates constants.
+SparseMatrixd gradient_regularizer(const Mesh& mesh);
+
+//! R_edge = Σ over interior non-crease edges (a_t + a_u)(F_t − F_u)ᵀ(F_t − F_u), F = √a·G:
+//! penalises jumps of the gradient across an edge shared (with the same render vertices) by
+//! exactly two faces. Annihilates every linear function on a flat mesh.
+//! \param interior_edges if given, receives the number of edges that contributed
+SparseMatrixd edge_regularizer(const Mesh& mesh, size_t* interior_edges = nullptr);
+
+//! b = ∫ h_i f by Monte Carlo over the samples: #V by K.
+//! \param values #S by K, the signal at the samples
+RowMatrixXd fit_right_hand_side(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values);
+
+//! Vertex values from sample values.
+//!  - Average: D⁻¹b, D the lumped mass (∫ h_i): the barycentric-weighted average of the samples.
+//!  - LeastSquares: (A + αR) x = b, one sparse Cholesky factorisation for all K columns.
+//! A vertex no sampled face touches keeps its prior value. When the system is singular to
+//! working precision (α = 0 with a mass matrix that cannot see a vertex), it is stabilised by a
+//! pull towards the prior, λ·D(x − prior), with the smallest λ that factorises; FitStats says so.
+//! \param prior #V by K: the point-sampled values (what Point returns)
+//! \return #V by K, all finite
+//! \throw SolverError if no stabilised system factorises, InputError for bad shapes or α
+RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values,
+                              const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
+
+}  // namespace prtsub

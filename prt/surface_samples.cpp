@@ -1,0 +1,92 @@
+// Surface samples for the least-squares fit (Kavan et al. 2011, section 3.3).
+//
+// The fit needs b_i = ∫ h_i f, estimated per face: ∫_t h_i f ≈ a_t/n_t Σ_{j∈t} h_i(p_j) f(p_j).
+// Splitting the integral by face keeps the estimate unbiased for any allocation as long as every
+// face with area has a sample, which the per-face minimum guarantees; spending the rest by area
+// keeps the sampling density uniform, which is what minimises variance for a smooth f. Inside a
+// face the n points are a Fibonacci rank-1 lattice in the unit square, shifted by one seeded
+// random vector and folded onto the triangle: each point is uniform on the face, and the set
+// covers it evenly, so a face's samples do not clump as independent ones would.
+#include "prt/surface_samples.h"
+
+#include <cmath>
+
+#include "prt/sampling.h"
+#include "subdiv/exceptions.h"
+
+namespace prtsub {
+
+SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o) {
+  if (!(o.per_triangle >= 0) || !std::isfinite(o.per_triangle) || !(o.density >= 0) || !std::isfinite(o.density))
+    throw InputError("samples: counts must be finite and non-negative");
+  const size_t F = mesh.num_faces();
+  std::vector<double> area(F);
+  double total_area = 0;
+  for (size_t f = 0; f < F; ++f) {
+    const Triangle& t = mesh.triangles[f];
+    area[f] = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
+    if (!std::isfinite(area[f])) area[f] = 0;
+    total_area += area[f];
+  }
+  // Faces below this are numerically flat: a sample there would carry no weight in b.
+  const double tiny = 1e-14 * total_area / static_cast<double>(std::max<size_t>(F, 1));
+  std::vector<size_t> count(F, 0);
+  size_t fixed = 0;
+  for (size_t f = 0; f < F; ++f)
+    if (area[f] > tiny) count[f] = o.min_per_triangle, fixed += o.min_per_triangle;
+  const double wanted = o.density > 0 ? o.density * total_area : o.per_triangle * static_cast<double>(F);
+  if (wanted > 4e9) throw InputError("samples: " + std::to_string(wanted) + " samples requested; at most 4e9");
+  const size_t extra = wanted > static_cast<double>(fixed) ? static_cast<size_t>(std::llround(wanted)) - fixed : 0;
+  if (extra > 0 && total_area > 0) {
+    // Systematic sampling of the cumulative area: sample k lands at (k + r) / extra of it.
+    Rng rng(o.seed, 0);
+    const double r = rng.uniform(), step = total_area / static_cast<double>(extra);
+    double cumulative = 0;
+    size_t k = 0;
+    for (size_t f = 0; f < F && k < extra; ++f) {
+      cumulative += area[f] > tiny ? area[f] : 0;
+      while (k < extra && (static_cast<double>(k) + r) * step < cumulative) ++count[f], ++k;
+    }
+    for (size_t f = F; k < extra && f-- > 0;)  // rounding left some over: give them to the last face with area
+      if (area[f] > tiny) count[f] += extra - k, k = extra;
+  }
+
+  SurfaceSamples s;
+  s.begin.assign(F + 1, 0);
+  for (size_t f = 0; f < F; ++f) s.begin[f + 1] = s.begin[f] + count[f];
+  const size_t S = s.begin[F];
+  const auto n = static_cast<Eigen::Index>(S);
+  s.points.resize(n, 3), s.normals.resize(n, 3), s.offsets.resize(n, 3), s.barycentric.resize(n, 3);
+  s.face.resize(S), s.weight.resize(S);
+  const double golden = 0.6180339887498949;
+  for (size_t f = 0; f < F; ++f) {
+    if (count[f] == 0) continue;
+    const Triangle& t = mesh.triangles[f];
+    const Eigen::Vector3d a = mesh.point(t[0]), b = mesh.point(t[1]), c = mesh.point(t[2]);
+    Eigen::Vector3d face_normal = (b - a).cross(c - a);
+    face_normal = face_normal.norm() > 0 ? Eigen::Vector3d(face_normal.normalized()) : Eigen::Vector3d::UnitZ();
+    Rng rng(o.seed, 1 + f);
+    const double su = rng.uniform(), sv = rng.uniform();
+    for (size_t k = 0; k < count[f]; ++k) {
+      double u = std::fmod((static_cast<double>(k) + su) / static_cast<double>(count[f]), 1.0);
+      double v = std::fmod(static_cast<double>(k) * golden + sv, 1.0);
+      if (u + v > 1) u = 1 - u, v = 1 - v;  // fold the square onto the triangle: measure-preserving
+      const Eigen::Vector3d w(1 - u - v, u, v);
+      const size_t j = s.begin[f] + k;
+      const auto i = static_cast<Eigen::Index>(j);
+      s.face[j] = static_cast<uint32_t>(f);
+      s.weight[j] = area[f] / static_cast<double>(count[f]);
+      s.barycentric.row(i) = w.transpose();
+      s.points.row(i) = (w[0] * a + w[1] * b + w[2] * c).transpose();
+      Eigen::Vector3d nrm = w[0] * mesh.normals.row(t[0]) + w[1] * mesh.normals.row(t[1]) + w[2] * mesh.normals.row(t[2]);
+      nrm = nrm.norm() > 1e-12 ? Eigen::Vector3d(nrm.normalized()) : face_normal;
+      s.normals.row(i) = nrm.transpose();
+      // Inside a flat face, leaving along the face's own normal (to the shading side) can never
+      // start a ray behind a neighbouring face, unlike an interpolated vertex direction.
+      s.offsets.row(i) = (face_normal.dot(nrm) >= 0 ? face_normal : Eigen::Vector3d(-face_normal)).transpose();
+    }
+  }
+  return s;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,38 @@
+// Seeded, area-stratified sample points on a mesh's surface: the data of the least-squares fit.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "subdiv/mesh.h"
+
+namespace prtsub {
+
+struct SampleOptions {
+  double per_triangle = 4;   //!< average samples per triangle (total = per_triangle · #F) ...
+  double density = 0;        //!< ... or, when > 0, samples per unit area (total = density · area)
+  size_t min_per_triangle = 1;  //!< every triangle of positive area gets at least this many
+  uint64_t seed = 7;
+};
+
+//! Samples grouped by triangle: face f's samples are rows begin[f] .. begin[f+1]-1.
+struct SurfaceSamples {
+  RowMatrixX3d points;       //!< #S by 3, on the surface
+  RowMatrixX3d normals;      //!< #S by 3, interpolated render-vertex normals, unit
+  RowMatrixX3d offsets;      //!< #S by 3, unit directions to move ray origins off the surface
+  RowMatrixX3d barycentric;  //!< #S by 3, weights of the face's corners
+  std::vector<uint32_t> face;   //!< #S
+  std::vector<size_t> begin;    //!< #F + 1
+  std::vector<double> weight;   //!< #S: the face's area over its sample count (Monte Carlo weight)
+  size_t size() const { return face.size(); }
+};
+
+//! Each face of positive area gets min_per_triangle samples; the rest of the total is shared
+//! in proportion to area by systematic sampling of the cumulative area (one seeded offset).
+//! Within a face, n samples form a randomly shifted rank-1 lattice warped onto the triangle,
+//! so each is uniform on the face (the estimate stays unbiased) and together they are stratified.
+//! Zero-area faces get none. The result depends on the mesh and the seed only.
+//! \throw InputError for a non-finite or negative count
+SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& options);
+
+}  // namespace prtsub

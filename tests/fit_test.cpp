@@ -1,0 +1,470 @@
+#include "prt/fit.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <functional>
+
+#include "helpers.h"
+#include "subdiv/exceptions.h"
+#include "prt/sampling.h"
+
+namespace prtsub {
+namespace {
+
+using Signal = std::function<double(const Eigen::Vector3d&)>;
+
+// An n×n grid over [0,1]² at z = 0, two triangles per cell; interior points jittered (seeded)
+// so that areas differ, as on real meshes.
+RawMesh grid(int n, double jitter = 0.25, uint64_t seed = 3) {
+  RawMesh m;
+  m.positions.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      double x = double(i) / n, y = double(j) / n;
+      if (i > 0 && i < n && j > 0 && j < n) {
+        Rng r(seed, uint64_t(j * (n + 1) + i));
+        x += jitter / n * (r.uniform() - 0.5), y += jitter / n * (r.uniform() - 0.5);
+      }
+      m.positions.row(j * (n + 1) + i) << x, y, 0;
+    }
+  m.face_offsets.push_back(0);
+  auto face = [&](int64_t a, int64_t b, int64_t c) {
+    m.face_indices.insert(m.face_indices.end(), {a, b, c});
+    m.face_offsets.push_back(m.face_indices.size());
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int64_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      face(a, b, c), face(a, c, d);
+    }
+  return m;
+}
+
+RowMatrixXd at_vertices(const Mesh& m, const Signal& f) {
+  RowMatrixXd v(Eigen::Index(m.num_vertices()), 1);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = f(m.point(i));
+  return v;
+}
+
+RowMatrixXd at_samples(const SurfaceSamples& s, const Signal& f) {
+  RowMatrixXd v(Eigen::Index(s.size()), 1);
+  for (Eigen::Index i = 0; i < v.rows(); ++i) v(i, 0) = f(s.points.row(i).transpose());
+  return v;
+}
+
+// ∫ over each face of F(p, barycentrics) by a Duffy-mapped 12×12 Gauss-Legendre rule:
+// an independent quadrature, not the samples under test.
+double integrate(const Mesh& m, const std::function<double(uint32_t, const Eigen::Vector3d&, const Eigen::Vector3d&)>& F) {
+  std::vector<double> x, w;
+  test::gauss_legendre(12, x, w);
+  double total = 0;
+  for (uint32_t f = 0; f < m.num_faces(); ++f) {
+    const Triangle& t = m.triangles[f];
+    const double area = triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+    for (size_t i = 0; i < x.size(); ++i)
+      for (size_t j = 0; j < x.size(); ++j) {
+        const double s = 0.5 * (x[i] + 1), r = 0.5 * (x[j] + 1);
+        const double u = s, v = (1 - s) * r, jac = (1 - s) * 0.25 * w[i] * w[j];
+        const Eigen::Vector3d b(1 - u - v, u, v);
+        const Eigen::Vector3d p = b[0] * m.point(t[0]) + b[1] * m.point(t[1]) + b[2] * m.point(t[2]);
+        total += 2 * area * jac * F(f, p, b);
+      }
+  }
+  return total;
+}
+
+// ‖f − g_x‖² over the surface, g_x the linear interpolant of vertex values x.
+double l2_error(const Mesh& m, const RowMatrixXd& x, const Signal& f) {
+  return integrate(m, [&](uint32_t face, const Eigen::Vector3d& p, const Eigen::Vector3d& b) {
+    const Triangle& t = m.triangles[face];
+    const double g = b[0] * x(t[0], 0) + b[1] * x(t[1], 0) + b[2] * x(t[2], 0);
+    return (f(p) - g) * (f(p) - g);
+  });
+}
+
+double sigmoid(const Eigen::Vector3d& p) { return 1 / (1 + std::exp(-(p.x() - 0.37) / 0.03)); }
+
+TEST(SurfaceSamples, EveryFaceGetsItsMinimumAndTheRestGoesByArea) {
+  Mesh m = test::build(grid(6, 0.6));
+  SampleOptions o;
+  o.per_triangle = 10, o.min_per_triangle = 2;
+  SurfaceSamples s = make_surface_samples(m, o);
+  EXPECT_EQ(s.size(), 10 * m.num_faces());
+  double area_total = 0, weight_total = 0, worst_share = 0;
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const Triangle& t = m.triangles[f];
+    const double a = triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+    const size_t n = s.begin[f + 1] - s.begin[f];
+    EXPECT_GE(n, 2u);
+    double wsum = 0;
+    for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) {
+      wsum += s.weight[k];
+      EXPECT_EQ(s.face[k], f);
+      const Eigen::Vector3d b = s.barycentric.row(Eigen::Index(k)).transpose();
+      EXPECT_GE(b.minCoeff(), 0.0);
+      EXPECT_NEAR(b.sum(), 1.0, 1e-12);
+      const Eigen::Vector3d p = b[0] * m.point(t[0]) + b[1] * m.point(t[1]) + b[2] * m.point(t[2]);
+      EXPECT_LT((p - s.points.row(Eigen::Index(k)).transpose()).norm(), 1e-12);
+    }
+    EXPECT_NEAR(wsum, a, 1e-12);
+    area_total += a, weight_total += wsum;
+    // Beyond the minimum, a face's share tracks its area to within one sample (systematic sampling).
+    const double expected_extra = 8.0 * double(m.num_faces()) * a;
+    worst_share = std::max(worst_share, std::abs(double(n - 2) - expected_extra));
+  }
+  EXPECT_NEAR(weight_total, area_total, 1e-12);
+  EXPECT_LE(worst_share, 1.0 + 1e-9);
+  // Same seed, same samples; another seed, others.
+  SurfaceSamples again = make_surface_samples(m, o);
+  EXPECT_EQ(again.points, s.points);
+  o.seed = 99;
+  EXPECT_NE(make_surface_samples(m, o).points, s.points);
+}
+
+TEST(SurfaceSamples, DensityModeAndZeroAreaFaces) {
+  RawMesh r = grid(4, 0);
+  // A zero-area face (three collinear points) beside the grid.
+  const Eigen::Index base = r.positions.rows();
+  r.positions.conservativeResize(base + 3, 3);
+  r.positions.row(base) << 2, 0, 0;
+  r.positions.row(base + 1) << 3, 0, 0;
+  r.positions.row(base + 2) << 4, 0, 0;
+  r.face_indices.insert(r.face_indices.end(), {base, base + 1, base + 2});
+  r.face_offsets.push_back(r.face_indices.size());
+  Mesh m = test::build(r);
+  SampleOptions o;
+  o.density = 1000, o.min_per_triangle = 1;
+  SurfaceSamples s = make_surface_samples(m, o);
+  EXPECT_EQ(s.size(), 1000u);  // density × unit area
+  const size_t last = m.num_faces() - 1;
+  EXPECT_EQ(s.begin[last + 1] - s.begin[last], 0u);
+}
+
+TEST(SurfaceSamples, EachSampleIsUniformOnItsFace) {
+  // The mean of x² over all samples estimates ∫x²/area = 1/3 on the unit square without bias;
+  // with the lattice the error is far below the iid standard error, which bounds it here.
+  Mesh m = test::build(grid(3, 0.5));
+  SampleOptions o;
+  o.per_triangle = 50;
+  double worst = 0;
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    o.seed = seed;
+    SurfaceSamples s = make_surface_samples(m, o);
+    double est = 0;
+    for (size_t k = 0; k < s.size(); ++k) est += s.weight[k] * s.points(Eigen::Index(k), 0) * s.points(Eigen::Index(k), 0);
+    worst = std::max(worst, std::abs(est - 1.0 / 3));
+  }
+  const double iid_sigma = std::sqrt((1.0 / 5 - 1.0 / 9) / (50.0 * 18));  // Var(x²) on [0,1]², over 900 samples
+  EXPECT_LT(worst, 3 * iid_sigma);
+}
+
+TEST(FitMatrices, AnalyticMassIntegratesPiecewiseLinearProductsExactly) {
+  Mesh m = test::build(grid(5, 0.5));
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  const SparseMatrixd A = mass_matrix(m, s, MassMatrix::Analytic);
+  const Eigen::VectorXd one = Eigen::VectorXd::Ones(A.rows());
+  EXPECT_NEAR(one.dot(A * one), 1.0, 1e-12);  // total area
+  Eigen::VectorXd x(A.rows()), y(A.rows());
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) x[i] = m.point(i).x(), y[i] = 1 + 2 * m.point(i).y();
+  EXPECT_NEAR(x.dot(A * x), 1.0 / 3, 1e-12);     // ∫x²
+  EXPECT_NEAR(x.dot(A * y), 0.5 * 2.0, 1e-12);   // ∫x(1+2y) = 1/2 + 2·1/4
+  // The sampled matrix estimates the same integrals.
+  SampleOptions many;
+  many.per_triangle = 400;
+  const SparseMatrixd As = mass_matrix(m, make_surface_samples(m, many), MassMatrix::Sampled);
+  EXPECT_NEAR(one.dot(As * one), 1.0, 1e-12);  // Σ weights = area, exactly
+  EXPECT_NEAR(x.dot(As * x), 1.0 / 3, 2e-3);
+}
+
+TEST(FitMatrices, GradientRegularizerIsAreaScaledDirichletEnergy) {
+  const int n = 6;
+  Mesh m = test::build(grid(n, 0));
+  const SparseMatrixd R = gradient_regularizer(m);
+  Eigen::VectorXd one = Eigen::VectorXd::Ones(R.rows()), x(R.rows());
+  EXPECT_LT((R * one).norm(), 1e-12);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) x[i] = 3 * m.point(i).x() - m.point(i).y();
+  // Σ_t a_t² |∇g|²: 2n² faces of area 1/(2n²), |∇g|² = 10.
+  EXPECT_NEAR(x.dot(R * x), 10.0 / (2.0 * n * n), 1e-12);
+  EXPECT_LT((Eigen::MatrixXd(R) - Eigen::MatrixXd(R).transpose()).norm(), 1e-15);
+}
+
+TEST(FitMatrices, EdgeRegularizerIgnoresLinearFunctionsAndCreases) {
+  Mesh m = test::build(grid(5, 0.5));
+  size_t interior = 0;
+  const SparseMatrixd R = edge_regularizer(m, &interior);
+  EXPECT_EQ(interior, 3u * 5 * 5 - 2 * 5);  // every edge not on the square's boundary
+  Eigen::VectorXd x(R.rows()), tent = Eigen::VectorXd::Zero(R.rows());
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) x[i] = 2 + 3 * m.point(i).x() - m.point(i).y();
+  tent[14] = 1;  // an interior vertex: a hat has gradient jumps on every edge around it
+  EXPECT_GT(tent.dot(R * tent), 0.1);
+  EXPECT_LT(x.dot(R * x), 1e-13 * x.squaredNorm() * tent.dot(R * tent));  // rounding only
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig{Eigen::MatrixXd(R)};
+  EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-12);  // positive semi-definite
+
+  // A cube: every cube edge is a crease (90° > 60°), so only the face diagonals are interior.
+  Mesh cube = test::build(test::cube());
+  edge_regularizer(cube, &interior);
+  EXPECT_EQ(interior, 6u);
+  // Folded but smooth (crease angle 120°): a function linear on the unfolded strip still costs nothing.
+  Mesh folded = test::build(test::cube(), 120);
+  const SparseMatrixd Rf = edge_regularizer(folded, &interior);
+  EXPECT_EQ(interior, 18u);
+  Eigen::VectorXd c = Eigen::VectorXd::Constant(Rf.rows(), 0.7);
+  EXPECT_LT(c.dot(Rf * c), 1e-14);
+}
+
+struct FitRun {
+  RowMatrixXd point, average, lsq, lsq_alpha;
+};
+
+FitRun run_fits(const Mesh& m, const Signal& f, const SampleOptions& so, double alpha = 0.1) {
+  SurfaceSamples s = make_surface_samples(m, so);
+  const RowMatrixXd values = at_samples(s, f);
+  FitRun r;
+  r.point = at_vertices(m, f);
+  FitOptions o;
+  o.method = FitMethod::Average;
+  r.average = fit_vertex_values(m, s, values, r.point, o);
+  o.method = FitMethod::LeastSquares;
+  o.alpha = 0;
+  r.lsq = fit_vertex_values(m, s, values, r.point, o);
+  o.alpha = alpha;
+  r.lsq_alpha = fit_vertex_values(m, s, values, r.point, o);
+  return r;
+}
+
+TEST(Fit, LeastSquaresBeatsAverageBeatsPointOnAShadowEdge) {
+  Mesh m = test::build(grid(8, 0.5));
+  SampleOptions so;
+  so.per_triangle = 64;  // dense, as the paper's E_lsq: with few samples α = 0 fits the noise
+  FitRun r = run_fits(m, sigmoid, so);
+  const double e_point = l2_error(m, r.point, sigmoid), e_avg = l2_error(m, r.average, sigmoid),
+               e_lsq = l2_error(m, r.lsq, sigmoid), e_alpha = l2_error(m, r.lsq_alpha, sigmoid);
+  // The exact L2 projection, from the independent quadrature: the lowest error any vertex values reach.
+  SurfaceSamples s = make_surface_samples(m, so);
+  Eigen::MatrixXd A(mass_matrix(m, s, MassMatrix::Analytic));
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(A.rows());
+  for (int i = 0; i < A.rows(); ++i)
+    b[i] = integrate(m, [&](uint32_t face, const Eigen::Vector3d& p, const Eigen::Vector3d& w) {
+      const Triangle& t = m.triangles[face];
+      for (int c = 0; c < 3; ++c)
+        if (int(t[c]) == i) return w[c] * sigmoid(p);
+      return 0.0;
+    });
+  RowMatrixXd proj = A.ldlt().solve(b);
+  const double e_proj = l2_error(m, proj, sigmoid);
+  EXPECT_LT(e_lsq, 0.8 * e_avg);
+  EXPECT_LT(e_lsq, 0.8 * e_point);
+  EXPECT_LE(e_lsq, e_alpha);
+  EXPECT_LT(e_alpha, e_avg);
+  // (A noiseless f favours point sampling, which interpolates it exactly at the vertices;
+  // E_avg <= E_point is a claim about noisy signals, measured on real scenes in BENCHMARKS.md.)
+  // Optimality: lsq's excess over the projection is δbᵀA⁻¹δb, δb the Monte Carlo error of b;
+  // its mean is trace(A⁻¹C), C the covariance of b over sample seeds. Estimate C from 24 other
+  // seeds and hold this seed's excess to 4× that mean (a sum of many squared terms rarely
+  // exceeds its mean by 4×, and a wrong solve misses by orders of magnitude more).
+  EXPECT_GE(e_lsq, e_proj * (1 - 1e-9));
+  const int seeds = 24;
+  Eigen::MatrixXd bs(A.rows(), seeds);
+  for (int k = 0; k < seeds; ++k) {
+    SampleOptions other = so;
+    other.seed = 1000 + uint64_t(k);
+    SurfaceSamples sk = make_surface_samples(m, other);
+    bs.col(k) = Eigen::MatrixXd(fit_right_hand_side(m, sk, at_samples(sk, sigmoid)));
+  }
+  const Eigen::MatrixXd centred = bs.colwise() - bs.rowwise().mean();
+  const Eigen::MatrixXd C = centred * centred.transpose() / (seeds - 1);
+  const double mean_excess = (A.ldlt().solve(C)).trace();
+  EXPECT_LT(e_lsq - e_proj, 4 * mean_excess);
+  std::printf("E_point %.3g  E_avg %.3g  E(0.1) %.3g  E_lsq %.3g  E_proj %.3g  (lsq excess %.2g, expected %.2g)\n", e_point,
+              e_avg, e_alpha, e_lsq, e_proj, e_lsq - e_proj, mean_excess);
+}
+
+TEST(Fit, SampledMassAndEdgeRegularizerReproduceLinearSignalsExactly) {
+  // With the sampled mass matrix the fit is discrete least squares on the samples: a linear f
+  // is interpolated exactly by its own vertex values, and R_edge does not object to it.
+  Mesh m = test::build(grid(6, 0.5));
+  const Signal f = [](const Eigen::Vector3d& p) { return 0.3 + 2 * p.x() - 5 * p.y(); };
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  FitOptions o;
+  o.mass = MassMatrix::Sampled, o.alpha = 0.1;
+  const RowMatrixXd prior = RowMatrixXd::Zero(Eigen::Index(m.num_vertices()), 1);
+  FitStats st;
+  RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, f), prior, o, &st);
+  EXPECT_LT((x - at_vertices(m, f)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(st.stabilizer, 0.0);
+  EXPECT_EQ(st.unsupported, 0u);
+}
+
+TEST(Fit, ManyRightHandSidesMatchADenseSolveColumnByColumn) {
+  // Order 10: 100 right-hand sides through one factorisation.
+  Mesh m = test::build(test::icosphere(1));
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  RowMatrixXd values(Eigen::Index(s.size()), 100);
+  for (Eigen::Index i = 0; i < values.rows(); ++i)
+    for (int k = 0; k < 100; ++k) values(i, k) = std::sin(k * s.points(i, 0) + 0.1 * k) + s.points(i, 2) * k;
+  const RowMatrixXd prior = RowMatrixXd::Zero(Eigen::Index(m.num_vertices()), 100);
+  FitOptions o;
+  RowMatrixXd x = fit_vertex_values(m, s, values, prior, o);
+  Eigen::MatrixXd M = Eigen::MatrixXd(mass_matrix(m, s, MassMatrix::Analytic)) + o.alpha * Eigen::MatrixXd(edge_regularizer(m));
+  Eigen::MatrixXd b = fit_right_hand_side(m, s, values);
+  Eigen::MatrixXd dense = M.llt().solve(b);
+  EXPECT_LT((Eigen::MatrixXd(x) - dense).cwiseAbs().maxCoeff(), 1e-10 * dense.cwiseAbs().maxCoeff());
+}
+
+TEST(FitStability, SliversBelowOneHundredthOfADegree) {
+  // Pull one interior grid vertex to within 1e-6 of a grid line: faces with angles ~1e-4°.
+  RawMesh r = grid(6, 0);
+  r.positions(3 * 7 + 3, 1) = r.positions(2 * 7 + 3, 1) + 1e-6;
+  Mesh m = test::build(r);
+  double min_angle = 180;
+  for (const Triangle& t : m.triangles)
+    for (int c = 0; c < 3; ++c) {
+      Eigen::Vector3d u = m.point(t[(c + 1) % 3]) - m.point(t[c]), v = m.point(t[(c + 2) % 3]) - m.point(t[c]);
+      min_angle = std::min(min_angle, std::atan2(u.cross(v).norm(), u.dot(v)) * 180 / M_PI);
+    }
+  ASSERT_LT(min_angle, 0.01);
+  const Signal lin = [](const Eigen::Vector3d& p) { return 1 + p.x() + 2 * p.y(); };
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient}) {
+    FitOptions o;
+    o.mass = MassMatrix::Sampled, o.regularizer = reg, o.alpha = reg == Regularizer::Edge ? 0.1 : 0.0;
+    RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, lin), at_vertices(m, lin), o);
+    ASSERT_TRUE(x.allFinite());
+    EXPECT_LT((x - at_vertices(m, lin)).cwiseAbs().maxCoeff(), 1e-6);
+  }
+  // A shadow edge over the slivers: every fit stays finite and bounded. (Unregularised, the
+  // nearly equal hats of a sliver's close corners amplify sampling noise; α = 0.1 holds them.)
+  FitRun fr = run_fits(m, sigmoid, SampleOptions{});
+  EXPECT_TRUE(fr.lsq.allFinite() && fr.lsq_alpha.allFinite() && fr.average.allFinite());
+  const double e_avg = l2_error(m, fr.average, sigmoid), e_lsq = l2_error(m, fr.lsq, sigmoid);
+  std::printf("slivers: E_point %.3g E_avg %.3g E_lsq %.3g E(0.1) %.3g\n", l2_error(m, fr.point, sigmoid), e_avg, e_lsq,
+              l2_error(m, fr.lsq_alpha, sigmoid));
+  EXPECT_LT(l2_error(m, fr.lsq_alpha, sigmoid), 1.2 * e_avg);
+  EXPECT_LT(e_lsq, 10 * e_avg);
+  for (const RowMatrixXd* x : {&fr.lsq_alpha, &fr.average}) EXPECT_LT((x->array() - 0.5).abs().maxCoeff(), 1.0);
+}
+
+TEST(FitStability, NearZeroAreaTrianglesIsolatedAndUnsampledVertices) {
+  RawMesh r = grid(5, 0.4);
+  const Eigen::Index base = r.positions.rows();
+  // A separate triangle of relative area 1e-22 (no samples, no gradient), one of ordinary area
+  // that the density below leaves without samples, and an isolated vertex.
+  r.positions.conservativeResize(base + 7, 3);
+  r.positions.row(base + 0) << 3, 0, 0;
+  r.positions.row(base + 1) << 4, 0, 0;
+  r.positions.row(base + 2) << 3.5, 1e-22, 0;
+  r.positions.row(base + 3) << 5, 0, 0;
+  r.positions.row(base + 4) << 5.001, 0, 0;
+  r.positions.row(base + 5) << 5, 0.001, 0;
+  r.positions.row(base + 6) << 9, 9, 9;
+  for (Eigen::Index k : {base, base + 3}) {
+    r.face_indices.insert(r.face_indices.end(), {k, k + 1, k + 2});
+    r.face_offsets.push_back(r.face_indices.size());
+  }
+  Mesh m = test::build(r);
+  // The loader drops unreferenced vertices; add one back by hand as a caller of the library could.
+  m.vertex_position.push_back(0);
+  m.normals.conservativeResize(m.normals.rows() + 1, 3);
+  m.normals.row(m.normals.rows() - 1) << 0, 0, 1;
+  SampleOptions so;
+  so.density = 400, so.min_per_triangle = 0;
+  SurfaceSamples s = make_surface_samples(m, so);
+  const Signal f = sigmoid;
+  RowMatrixXd prior = at_vertices(m, f);
+  prior.bottomRows(7).setConstant(0.123);
+  // The grid alone, with the grid's samples: its values must not feel the parts that hold none.
+  const size_t grid_faces = 50;
+  Mesh g = m;
+  g.triangles.resize(grid_faces), g.source_face.resize(grid_faces);
+  SurfaceSamples gs = s;
+  ASSERT_EQ(s.begin[m.num_faces()], s.begin[grid_faces]);  // no samples beyond the grid
+  gs.begin.resize(grid_faces + 1);
+  for (double alpha : {0.0, 0.1}) {
+    FitOptions o;
+    o.alpha = alpha;
+    FitStats st;
+    RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, f), prior, o, &st);
+    ASSERT_TRUE(x.allFinite());
+    EXPECT_EQ(st.unsupported, 7u);  // 3 + 3 + the isolated one keep their prior
+    EXPECT_TRUE((x.bottomRows(7).array() == 0.123).all());
+    RowMatrixXd xg = fit_vertex_values(g, gs, at_samples(gs, f), prior, o);
+    EXPECT_LT((x - xg).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(FitStability, TranslationAndScaleDoNotChangeTheResult) {
+  RawMesh r = grid(6, 0.5);
+  Mesh m = test::build(r);
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  const RowMatrixXd values = at_samples(s, sigmoid), prior = at_vertices(m, sigmoid);
+  for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient}) {
+    FitOptions o;
+    o.regularizer = reg;
+    const RowMatrixXd x = fit_vertex_values(m, s, values, prior, o);
+    for (auto [scale, offset] : {std::pair{1.0, 1e6}, std::pair{1e-4, 0.0}}) {
+      Mesh t = test::build(test::transformed(r, scale, Eigen::Vector3d(offset, -offset, 0.5 * offset)));
+      SurfaceSamples st = make_surface_samples(t, SampleOptions{});
+      ASSERT_EQ(st.size(), s.size());
+      EXPECT_LT((st.barycentric - s.barycentric).cwiseAbs().maxCoeff(), 1e-6);
+      // The same values at the same (relative) places: the same vertex values.
+      const RowMatrixXd y = fit_vertex_values(t, st, values, prior, o);
+      EXPECT_LT((x - y).cwiseAbs().maxCoeff(), 1e-6) << "scale " << scale << " offset " << offset;
+    }
+  }
+}
+
+TEST(FitStability, SingularMassMatrixFallsBackToThePointValues) {
+  // A strip of 10 triangles has 12 vertices; one sample each gives a sampled mass matrix of
+  // rank 10 at most. With α = 0 the system is singular: the fit must say so and stay finite.
+  RawMesh r;
+  r.positions.resize(12, 3);
+  for (int i = 0; i < 6; ++i) r.positions.row(2 * i) << i, 0, 0, r.positions.row(2 * i + 1) << i, 1, 0;
+  r.face_offsets.push_back(0);
+  for (int64_t i = 0; i < 5; ++i) {
+    r.face_indices.insert(r.face_indices.end(), {2 * i, 2 * i + 2, 2 * i + 3, 2 * i, 2 * i + 3, 2 * i + 1});
+    r.face_offsets.push_back(r.face_indices.size() - 3);
+    r.face_offsets.push_back(r.face_indices.size());
+  }
+  Mesh m = test::build(r);
+  SampleOptions so;
+  so.per_triangle = 1;
+  SurfaceSamples s = make_surface_samples(m, so);
+  ASSERT_EQ(s.size(), 10u);
+  const Signal f = [](const Eigen::Vector3d& p) { return std::sin(p.x()) + p.y(); };
+  FitOptions o;
+  o.mass = MassMatrix::Sampled, o.alpha = 0;
+  FitStats st;
+  const RowMatrixXd prior = at_vertices(m, f);
+  RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, f), prior, o, &st);
+  ASSERT_TRUE(x.allFinite());
+  EXPECT_GT(st.stabilizer, 0.0);
+  EXPECT_NE(st.warning.find("singular"), std::string::npos);
+  // The samples are still matched (the pull is tiny), and the null space takes the prior.
+  for (size_t k = 0; k < s.size(); ++k) {
+    const Triangle& t = m.triangles[s.face[k]];
+    double g = 0;
+    for (int c = 0; c < 3; ++c) g += s.barycentric(Eigen::Index(k), c) * x(t[c], 0);
+    EXPECT_NEAR(g, f(s.points.row(Eigen::Index(k)).transpose()), 1e-4);
+  }
+  EXPECT_LT((x - prior).cwiseAbs().maxCoeff(), 2.0);
+}
+
+TEST(FitStability, BadInputIsAnErrorNotNaN) {
+  Mesh m = test::build(grid(2));
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  RowMatrixXd values = RowMatrixXd::Ones(Eigen::Index(s.size()), 1);
+  const RowMatrixXd prior = RowMatrixXd::Ones(Eigen::Index(m.num_vertices()), 1);
+  FitOptions o;
+  o.alpha = -1;
+  EXPECT_THROW(fit_vertex_values(m, s, values, prior, o), InputError);
+  o.alpha = 0.1;
+  values(0, 0) = NAN;
+  EXPECT_THROW(fit_vertex_values(m, s, values, prior, o), InputError);
+  EXPECT_THROW(fit_vertex_values(m, s, RowMatrixXd::Ones(3, 1), prior, o), InputError);
+  EXPECT_THROW(parse_fit_method("spline"), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub
