@@ -234,8 +234,12 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const R
 
   RowMatrixXd x = prior;
   if (o.method == FitMethod::Average) {
+    // Normalised by the samples' own Σ w h_i rather than ∫ h_i: a true weighted average, which
+    // stays within the samples' range however few there are.
+    const SparseMatrixd As = o.mass == MassMatrix::Sampled ? A : mass_matrix(mesh, s, MassMatrix::Sampled);
+    const Eigen::VectorXd weight = As * Eigen::VectorXd::Ones(V);
     for (Eigen::Index i = 0; i < V; ++i)
-      if (free[size_t(i)]) x.row(i) = b.row(i) / lumped[i];
+      if (free[size_t(i)] && weight[i] > 0) x.row(i) = b.row(i) / weight[i];
     stats.seconds_assemble = seconds_since(clock);
     if (stats_out) *stats_out = stats;
     return x;
