@@ -14,6 +14,7 @@
 #include <string>
 
 #include "cli/args.h"
+#include "cli/bake_options.h"
 #include "cli/progress.h"
 #include "cli/report.h"
 #include "cli/compare.h"
@@ -105,6 +106,8 @@ int cmd_bake(int argc, char** argv) {
   args.option("--batch", "B", "adaptive: faces split per Embree batch", &batch, 1, 1 << 20);
   args.option("--levels", "K", "uniform: 1→4 splits per face", &b.uniform.levels, 1, 8);
   args.option("--scheme", "linear|loop", "uniform: linear keeps the surface; loop smooths it [default linear]", &scheme);
+  FitCli fit;
+  fit.add(args);
   if (!args.parse(argc, argv, 2)) return 0;
   if (output.empty()) throw UsageError("bake: missing -o ASSET.ply");
   if (b.refine == "adaptive" && budget <= 0) throw UsageError("--budget: required with --refine adaptive");
@@ -116,15 +119,16 @@ int cmd_bake(int argc, char** argv) {
   b.estimate = parse_estimate(estimate);
   b.uniform.scheme = parse_uniform_scheme(scheme);
   b.uniform.crease_angle_deg = c.crease_angle;
+  fit.apply(b);
   check_transfer_options(c.transfer);
   check_writable(output);
   if (!c.report.empty()) check_writable(c.report);
 
-  Progress progress("transfer", 0, stderr_is_terminal());
-  BakeResult res = run_bake(b, [&](size_t n) { progress.add(n); });
+  StageProgress progress;
+  BakeResult res = run_bake(b, progress.callbacks());
   progress.finish();
   auto t_write0 = std::chrono::steady_clock::now();
-  write_asset(output, res.mesh, res.transfer, res.metadata);
+  write_asset(output, res.mesh, res.transfer, res.metadata, b.signal);
   const double t_write = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write0).count();
   const double total = res.seconds_total + t_write;
   const double transfer_seconds = res.seconds_transfer + res.refine.seconds_signal;
@@ -173,6 +177,8 @@ int cmd_bake(int argc, char** argv) {
     r.set("refine_overhead_fraction", st.seconds_total > 0 ? (st.seconds_total - st.seconds_signal) / st.seconds_total : 0.0);
   }
   if (b.refine == "uniform") r.set("levels", b.uniform.levels), r.set("scheme", scheme);
+  add_fit_report(r, res, b);
+  if (b.signal == AssetSignal::Ao) r.set("clamped_values", static_cast<uint64_t>(res.clamped));
   r.set("warnings", static_cast<uint64_t>(res.warnings.size()));
   add_defects(r, mesh.defects);
 
@@ -193,12 +199,29 @@ int cmd_bake(int argc, char** argv) {
   }
   if (b.refine == "uniform")
     std::printf("  refine:     uniform (OpenSubdiv, %s), %d levels, %.3f s\n", scheme.c_str(), b.uniform.levels, res.seconds_refine);
-  std::printf("  transfer:   order %d (%d coefficients), %d rays per vertex, seed %llu\n", c.transfer.order,
-              sh_count(c.transfer.order), c.transfer.rays, static_cast<unsigned long long>(c.transfer.seed));
+  if (b.signal == AssetSignal::Ao)
+    std::printf("  signal:     ambient occlusion, %d rays per vertex, seed %llu; %zu values clamped into [0, 1]\n",
+                c.transfer.rays, static_cast<unsigned long long>(c.transfer.seed), res.clamped);
+  else
+    std::printf("  transfer:   order %d (%d coefficients), %d rays per vertex, seed %llu\n", c.transfer.order,
+                sh_count(c.transfer.order), c.transfer.rays, static_cast<unsigned long long>(c.transfer.seed));
+  if (b.fit.method == FitMethod::Average)
+    std::printf("  fit:        average of %zu surface samples (%d rays each) in %.3f s\n", res.fit_data.samples.size(),
+                b.sample_rays, res.seconds_samples + res.seconds_fit);
+  if (b.fit.method == FitMethod::LeastSquares) {
+    const FitStats& f = res.fit;
+    std::printf("  fit:        least squares, %s regulariser, alpha %g, %s mass; %zu surface samples (%d rays each, %.3f s)\n",
+                regularizer_name(b.fit.regularizer), b.fit.alpha, mass_matrix_name(b.fit.mass), res.fit_data.samples.size(),
+                b.sample_rays, res.seconds_samples);
+    std::printf("              solve %.3f s (assemble %.3f, factor %.3f, solve %.3f), %.1f MiB; %zu vertices unsupported\n",
+                res.seconds_fit, f.seconds_assemble, f.seconds_factor, f.seconds_solve, f.solve_memory_mib, f.unsupported);
+  }
   std::printf("  rays:       %llu in %.3f s (%.2f Mrays/s)\n", static_cast<unsigned long long>(res.rays), transfer_seconds,
               rays_per_second / 1e6);
-  std::printf("  time:       %.3f s total (load %.3f, scene %.3f, transfer %.3f, refine %.3f, write %.3f); peak memory %.0f MiB\n",
-              total, res.seconds_load, res.seconds_scene, res.seconds_transfer, res.seconds_refine, t_write, peak_memory_mib());
+  std::printf("  time:       %.3f s total (load %.3f, scene %.3f, transfer %.3f, refine %.3f, samples %.3f, fit %.3f, write %.3f);\n"
+              "              peak memory %.0f MiB\n",
+              total, res.seconds_load, res.seconds_scene, res.seconds_transfer, res.seconds_refine, res.seconds_samples,
+              res.seconds_fit, t_write, peak_memory_mib());
   for (const std::string& w : res.warnings) std::fprintf(stderr, "prtsub: warning: %s\n", w.c_str());
   if (!c.report.empty()) r.write(c.report);
   return 0;

@@ -1,8 +1,10 @@
 #include "cli/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "prt/ray_scene.h"
+#include "prt/sampling.h"
 #include "subdiv/exceptions.h"
 
 namespace prtsub {
@@ -15,7 +17,37 @@ double since(std::chrono::steady_clock::time_point& t) {
 }
 }  // namespace
 
-BakeResult run_bake(const BakeSettings& s, const ProgressFn& progress) {
+size_t clamp_ao(RowMatrixXd& t0) {
+  const double hi = 1 / kAoPerT0;
+  size_t moved = 0;
+  for (Eigen::Index i = 0; i < t0.size(); ++i) {
+    double& v = t0.data()[i];
+    if (v < 0 || v > hi) v = std::clamp(v, 0.0, hi), ++moved;
+  }
+  return moved;
+}
+
+FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeSettings& s, const BakeProgress& progress) {
+  auto t = std::chrono::steady_clock::now();
+  FitData d;
+  d.samples = make_surface_samples(mesh, s.samples);
+  TransferOptions to = s.transfer;
+  to.rays = s.sample_rays;
+  to.seed = mix64(s.transfer.seed ^ 0x5A3D1E5ull);  // independent of the vertices' rays
+  to.stream_offset = 0;
+  if (progress.stage) progress.stage("samples", d.samples.size());
+  TransferStats stats;
+  d.values = shadowed_transfer(scene, d.samples.points, d.samples.normals, to, &stats, progress.add, &d.samples.offsets);
+  d.rays = stats.rays;
+  d.seconds = since(t);
+  return d;
+}
+
+BakeResult run_bake(const BakeSettings& s_in, const BakeProgress& progress) {
+  BakeSettings s = s_in;
+  if (s.signal == AssetSignal::Ao) s.transfer.order = 1;  // AO is order-1 transfer, rescaled
+  if (s.sample_rays < 1 || s.sample_rays > (1 << 20))
+    throw InputError("--sample-rays must be between 1 and 1048576, got " + std::to_string(s.sample_rays));
   if (s.refine != "none" && s.refine != "adaptive" && s.refine != "uniform")
     throw InputError("--refine must be none, adaptive or uniform, got '" + s.refine + "'");
   check_transfer_options(s.transfer);
@@ -33,7 +65,8 @@ BakeResult run_bake(const BakeSettings& s, const ProgressFn& progress) {
   r.seconds_scene = since(t);
   TransferStats stats;
   const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
-  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, s.transfer, &stats, progress, &offsets);
+  if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
+  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, s.transfer, &stats, progress.add, &offsets);
   r.rays = stats.rays;
   r.seconds_transfer = since(t);
   if (s.refine == "adaptive") {
@@ -46,9 +79,24 @@ BakeResult run_bake(const BakeSettings& s, const ProgressFn& progress) {
     r.seconds_refine = since(t);
     if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
   }
+  if (s.fit.method != FitMethod::Point) {
+    r.fit_data = sample_signal(r.mesh, scene, s, progress);
+    r.rays += r.fit_data.rays;
+    r.seconds_samples = since(t);
+    r.point = r.transfer;
+    r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.values, r.point, s.fit, &r.fit);
+    r.seconds_fit = since(t);
+    if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
+  }
+  if (r.point.size() == 0) r.point = r.transfer;
+  if (s.signal == AssetSignal::Ao) {
+    // The paper's choice: clamp after the fit (a constrained solve is rarely worth it).
+    r.clamped = clamp_ao(r.transfer);
+    clamp_ao(r.point);
+  }
   r.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  r.metadata = sh_convention_metadata(s.transfer.order);
+  r.metadata = s.signal == AssetSignal::Ao ? ao_metadata() : sh_convention_metadata(s.transfer.order);
   r.metadata.push_back({"source", s.input});
   r.metadata.push_back({"rays", std::to_string(s.transfer.rays)});
   r.metadata.push_back({"seed", std::to_string(s.transfer.seed)});
@@ -66,6 +114,16 @@ BakeResult run_bake(const BakeSettings& s, const ProgressFn& progress) {
   if (s.refine == "uniform") {
     r.metadata.push_back({"levels", std::to_string(s.uniform.levels)});
     r.metadata.push_back({"scheme", s.uniform.scheme == UniformScheme::Loop ? "loop" : "linear"});
+  }
+  r.metadata.push_back({"fit", fit_method_name(s.fit.method)});
+  if (s.fit.method != FitMethod::Point) {
+    r.metadata.push_back({"samples", std::to_string(r.fit_data.samples.size())});
+    r.metadata.push_back({"sample_rays", std::to_string(s.sample_rays)});
+  }
+  if (s.fit.method == FitMethod::LeastSquares) {
+    r.metadata.push_back({"alpha", std::to_string(s.fit.alpha)});
+    r.metadata.push_back({"regularizer", regularizer_name(s.fit.regularizer)});
+    r.metadata.push_back({"mass", mass_matrix_name(s.fit.mass)});
   }
   r.metadata.push_back({"generator", std::string("prtsub ") + kPrtsubVersion});
   return r;

@@ -39,6 +39,14 @@ Metadata sh_convention_metadata(int order) {
   };
 }
 
+Metadata ao_metadata() {
+  return {
+      {"prtsub_asset", "1"},
+      {"signal", "ao"},
+      {"ao", "ao=(1/pi)*integral(V*max(n.w,0)) in [0,1] (1 unoccluded) radiance=albedo*ambient*ao"},
+  };
+}
+
 void write_file_atomically(const std::string& path, const std::string& bytes) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   {
@@ -58,8 +66,11 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
   }
 }
 
-void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
-                 const Metadata& metadata) {
+void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
+                 const Metadata& metadata, AssetSignal signal) {
+  if (signal == AssetSignal::Ao && transfer_in.cols() != 1)
+    throw InputError(path + ": an AO asset takes one value per vertex, got " + std::to_string(transfer_in.cols()));
+  const RowMatrixXd transfer = signal == AssetSignal::Ao ? RowMatrixXd(transfer_in * kAoPerT0) : transfer_in;
   if (!host_is_little_endian()) throw IoError(path + ": big-endian hosts are not supported");
   const size_t V = mesh.num_vertices(), F = mesh.num_faces();
   const Eigen::Index K = transfer.cols();
@@ -88,7 +99,9 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   }
   out += "element vertex " + std::to_string(V) + "\n";
   for (const char* p : {"x", "y", "z", "nx", "ny", "nz"}) out += std::string("property float ") + p + "\n";
-  for (Eigen::Index c = 0; c < K; ++c) out += "property float t" + std::to_string(c) + "\n";
+  if (signal == AssetSignal::Ao) out += "property float ao\n";
+  else
+    for (Eigen::Index c = 0; c < K; ++c) out += "property float t" + std::to_string(c) + "\n";
   out += "element face " + std::to_string(F) + "\n";
   out += "property list uchar int vertex_indices\nproperty int source_face\nend_header\n";
   for (size_t v = 0; v < V; ++v) {
@@ -130,14 +143,24 @@ Asset read_asset(const std::string& path) {
   }
   int K = 0;
   while (v->scalar("t" + std::to_string(K))) ++K;
-  int order = static_cast<int>(std::lround(std::sqrt(K)));
-  if (K == 0 || order * order != K || order > kMaxShOrder)
-    throw InputError(path + ": asset has " + std::to_string(K) + " transfer coefficients; expected N² for an order N of 1 to 10");
-  a.order = order;
-  a.transfer.resize(V, K);
-  for (int c = 0; c < K; ++c) {
-    const auto& col = *v->scalar("t" + std::to_string(c));
-    for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, c) = col[static_cast<size_t>(i)];
+  if (K == 0 && v->scalar("ao")) {
+    a.signal = AssetSignal::Ao;
+    a.order = 1;
+    a.transfer.resize(V, 1);
+    const auto& col = *v->scalar("ao");
+    for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, 0) = col[static_cast<size_t>(i)] / kAoPerT0;
+    K = -1;  // read
+  }
+  if (K >= 0) {
+    int order = static_cast<int>(std::lround(std::sqrt(K)));
+    if (K == 0 || order * order != K || order > kMaxShOrder)
+      throw InputError(path + ": asset has " + std::to_string(K) + " transfer coefficients; expected N² for an order N of 1 to 10 (or one ao)");
+    a.order = order;
+    a.transfer.resize(V, K);
+    for (int c = 0; c < K; ++c) {
+      const auto& col = *v->scalar("t" + std::to_string(c));
+      for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, c) = col[static_cast<size_t>(i)];
+    }
   }
   for (Eigen::Index i = 0; i < V; ++i) {
     if (!a.positions.row(i).allFinite() || !a.normals.row(i).allFinite() || !a.transfer.row(i).allFinite())

@@ -12,6 +12,13 @@ namespace prtsub {
 
 using Metadata = std::vector<std::pair<std::string, std::string>>;
 
+//! What an asset's vertices carry: SH transfer (t0..t{N²-1}) or ambient occlusion (ao).
+enum class AssetSignal { Transfer, Ao };
+
+//! ao = t0 · 2/√π: ambient occlusion (1/π)∫V max(n·ω,0) dω is order-1 transfer over y_0 = 1/(2√π),
+//! divided by π. prtsub bakes AO as order-1 transfer and converts on writing and reading.
+constexpr double kAoPerT0 = 1.1283791670955126;
+
 //! An asset as read back: render vertices with their transfer.
 struct Asset {
   RowMatrixX3d positions;             //!< #V by 3
@@ -20,18 +27,23 @@ struct Asset {
   std::vector<Triangle> triangles;    //!< #F
   std::vector<uint32_t> source_face;  //!< #F
   Metadata metadata;                  //!< "key value" comment lines, in order
-  int order = 0;
+  int order = 0;                      //!< 1 for AO assets
+  AssetSignal signal = AssetSignal::Transfer;  //!< ao assets are read into transfer as t0 = ao / kAoPerT0
 };
 
-//! The comment lines stating the SH convention, written into every asset.
+//! The comment lines stating the SH convention, written into every transfer asset.
 Metadata sh_convention_metadata(int order);
+
+//! The comment lines of an AO asset: what ao means.
+Metadata ao_metadata();
 
 //! Writes mesh + transfer to `path` through a temporary file renamed into place, so a failed
 //! run leaves nothing behind.
-//! \param transfer #V by N², V = mesh.num_vertices()
+//! \param transfer #V by N², V = mesh.num_vertices(); for AO #V by 1 order-1 transfer, written
+//!        as the property ao = t0 · kAoPerT0
 //! \throw InputError if transfer holds NaN/Inf or has the wrong shape, IoError if writing fails
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
-                 const Metadata& metadata);
+                 const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer);
 
 //! Reads an asset and checks it: sizes consistent, indices in range, no NaN/Inf.
 //! \throw InputError naming the file and the first problem found

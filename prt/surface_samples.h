@@ -9,7 +9,7 @@
 namespace prtsub {
 
 struct SampleOptions {
-  double per_triangle = 4;   //!< average samples per triangle (total = per_triangle · #F) ...
+  double per_triangle = 16;  //!< average samples per triangle (total = per_triangle · #F) ...
   double density = 0;        //!< ... or, when > 0, samples per unit area (total = density · area)
   size_t min_per_triangle = 1;  //!< every triangle of positive area gets at least this many
   uint64_t seed = 7;

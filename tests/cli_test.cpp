@@ -38,12 +38,50 @@ TEST_F(Cli, BakeWritesAnAssetAndAReportWithTheDocumentedKeys) {
   std::string json = read_file_bytes(rep);
   for (const char* key : {"triangles_in", "vertices_in", "triangles_out", "vertices_out", "rays", "seconds_total",
                           "seconds_load", "seconds_scene", "seconds_transfer", "seconds_write", "rays_per_second",
-                          "defects_zero_area_faces", "defects_non_manifold_edges", "defects_winding_conflicts"})
+                          "defects_zero_area_faces", "defects_non_manifold_edges", "defects_winding_conflicts",
+                          "fit", "samples", "sample_rays", "alpha", "solve_memory_mib", "seconds_fit_factor"})
     EXPECT_NE(json.find(std::string("\"") + key + "\""), std::string::npos) << key;
-  EXPECT_NE(json.find("\"rays\": " + std::to_string(a.transfer.rows() * 16)), std::string::npos);
+  // 16 rays at each vertex, and the default 16 samples per triangle with 16 rays each.
+  EXPECT_NE(json.find("\"rays\": " + std::to_string(a.transfer.rows() * 16 + 82 * 16 * 16)), std::string::npos);
+  EXPECT_NE(json.find("\"fit\": \"lsq\""), std::string::npos);
   EXPECT_EQ(run({"inspect", out}), 0);
   EXPECT_EQ(run({"inspect", out, "--report", dir.path("i.json")}), 0);
   EXPECT_NE(read_file_bytes(dir.path("i.json")).find("\"order_99_percent_energy\""), std::string::npos);
+}
+
+TEST_F(Cli, AmbientOcclusionAssetsHoldOneClampedValuePerVertex) {
+  std::string in = dir.path("ao_scene.obj"), out = dir.path("ao.ply"), rep = dir.path("r.json");
+  test::write_obj(in, test::merge(test::icosphere(1), test::quad(3.0, -1.3, true)));
+  for (const char* fit : {"point", "average", "lsq"}) {
+    ASSERT_EQ(run({"bake", in, "-o", out, "--signal", "ao", "--fit", fit, "--rays", "64", "--report", rep}), 0) << fit;
+    Asset a = read_asset(out);
+    EXPECT_EQ(a.signal, AssetSignal::Ao);
+    EXPECT_EQ(a.transfer.cols(), 1);
+    const Eigen::ArrayXd ao = a.transfer.col(0).array() * kAoPerT0;
+    EXPECT_GE(ao.minCoeff(), 0.0);
+    EXPECT_LE(ao.maxCoeff(), 1.0);
+    // The sphere's top vertex sees open sky: exactly 1 when point-sampled (the estimator is exact
+    // when nothing is hit); fitted values there also average samples on the coarse sphere's
+    // faces, whose interpolated normals graze neighbouring faces. Its lowest vertex faces the
+    // plane 0.3 below: a 3×3 square seen from above, where most of the cosine lobe lands.
+    Eigen::Index top = 0, bottom = 0;
+    for (Eigen::Index v = 0; v < a.positions.rows(); ++v) {
+      if (std::abs(a.positions.row(v).norm() - 1) > 1e-5) continue;
+      if (a.positions(v, 2) > a.positions(top, 2)) top = v;
+      if (a.positions(v, 2) < a.positions(bottom, 2)) bottom = v;
+    }
+    EXPECT_NEAR(ao[top], 1.0, std::string(fit) == "point" ? 1e-6 : 0.03) << fit;
+    EXPECT_LT(ao[bottom], 0.2) << fit;
+    const std::string json = read_file_bytes(rep);
+    EXPECT_NE(json.find("\"clamped_values\""), std::string::npos);
+    EXPECT_NE(json.find("\"signal\": \"ao\""), std::string::npos);
+    EXPECT_EQ(run({"eval", out, "--source", in, "--points", "500"}), 0);
+  }
+  // The ao property is what a consumer reads.
+  EXPECT_NE(read_file_bytes(out).find("property float ao"), std::string::npos);
+  EXPECT_EQ(read_file_bytes(out).find("property float t0"), std::string::npos);
+  EXPECT_EQ(run({"bake", in, "-o", out, "--signal", "light"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", out, "--fit", "spline"}), 2);
 }
 
 TEST_F(Cli, BadInputExitsNonZeroAndLeavesNoOutput) {
