@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "cli/args.h"
+#include "cli/bake_options.h"
 #include "cli/pipeline.h"
 #include "cli/report.h"
 #include "prt/evaluate.h"
@@ -166,6 +167,8 @@ int cmd_compare(int argc, char** argv) {
   args.option("--frame-size", "W,H", "frame size [default 480,360]", &frame_size);
   args.option("--frame-rays", "R", "rays per pixel of the reference frame", &frame_rays, 1, 1 << 20);
   args.option("--report", "R.json", "also write a flat JSON summary", &report);
+  FitCli fit_cli;
+  fit_cli.add(args);
   if (!args.parse(argc, argv, 2)) return 0;
   if (budgets_s.empty()) throw UsageError("compare: missing --budgets T1,T2,...");
   if (out_dir.empty()) throw UsageError("compare: missing -o DIR");
@@ -189,6 +192,10 @@ int cmd_compare(int argc, char** argv) {
   ReferenceOptions ro;
   ro.points = static_cast<size_t>(eval_points);
   ro.rays = 8 * topt.rays;
+  BakeSettings fitted;  // the fit options, applied to every run that fits
+  fitted.transfer = topt;
+  fit_cli.apply(fitted);
+  if (fitted.signal == AssetSignal::Ao) topt.order = 1;
   ro.order = topt.order;
   ro.threads = topt.threads;
   std::printf("prtsub compare: %s (%zu triangles), order %d, %d rays; reference %zu points x %d rays\n", input.c_str(),
@@ -203,6 +210,7 @@ int cmd_compare(int argc, char** argv) {
   std::vector<BakeSettings> plan;
   BakeSettings base;
   base.input = input, base.load = LoadOptions{crease}, base.transfer = topt, base.batch = static_cast<size_t>(batch);
+  base.signal = fitted.signal, base.fit = fitted.fit, base.samples = fitted.samples, base.sample_rays = fitted.sample_rays;
   plan.push_back(base);
   std::vector<size_t> counts = budgets;
   for (int k = 1; k <= max_levels; ++k) {
@@ -220,6 +228,8 @@ int cmd_compare(int argc, char** argv) {
       if (count <= source.num_faces()) continue;
       BakeSettings a = base;
       a.refine = "adaptive", a.budget = count, a.estimate = e;
+      // The fit joins the default estimate's runs; the others compare estimates, point-sampled.
+      if (e != BakeSettings{}.estimate) a.fit.method = FitMethod::Point;
       plan.push_back(a);
     }
 
@@ -232,20 +242,28 @@ int cmd_compare(int argc, char** argv) {
   for (size_t i = 0; i < plan.size(); ++i) {
     const BakeSettings& s = plan[i];
     BakeResult r = run_bake(s);
-    EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, r.transfer);
-    Row row;
-    row.method = s.refine;
-    row.estimate = s.refine == "adaptive" ? estimate_name(s.estimate) : "";
-    row.triangles = r.mesh.num_faces();
-    row.vertices = r.mesh.num_vertices();
-    row.rms = e.rms_percent, row.p95 = e.p95_percent, row.seconds = r.seconds_total;
-    rows.push_back(row);
-    std::printf("  [%zu/%zu] %-8s %-9s %8zu triangles: RMS %7.3f%%  p95 %7.3f%%  %.2f s\n", i + 1, plan.size(), row.method.c_str(),
-                row.estimate.c_str(), row.triangles, row.rms, row.p95, row.seconds);
-    std::fflush(stdout);
-    if (row.triangles == frame_count || (s.refine == "uniform" && row.triangles == frame_count)) {
+    // A fitted run also carries its point-sampled values: two rows from one bake, the point row
+    // timed without the samples and the fit.
+    std::vector<std::pair<std::string, const RowMatrixXd*>> values = {{"point", &r.point}};
+    if (s.fit.method != FitMethod::Point) values.push_back({fit_method_name(s.fit.method), &r.transfer});
+    for (const auto& [fit, v] : values) {
+      EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, *v);
+      Row row;
+      row.method = s.refine;
+      row.estimate = s.refine == "adaptive" ? estimate_name(s.estimate) : "";
+      row.fit = fit;
+      row.triangles = r.mesh.num_faces();
+      row.vertices = r.mesh.num_vertices();
+      row.rms = e.rms_percent, row.p95 = e.p95_percent;
+      row.seconds = fit == "point" ? r.seconds_total - r.seconds_samples - r.seconds_fit : r.seconds_total;
+      rows.push_back(row);
+      std::printf("  [%zu/%zu] %-8s %-9s %-7s %8zu triangles: RMS %7.3f%%  p95 %7.3f%%  %.2f s\n", i + 1, plan.size(),
+                  row.method.c_str(), row.estimate.c_str(), row.fit.c_str(), row.triangles, row.rms, row.p95, row.seconds);
+      std::fflush(stdout);
+    }
+    if (r.mesh.num_faces() == frame_count && (s.refine == "uniform" || s.estimate == BakeSettings{}.estimate)) {
       const std::string key = s.refine == "uniform" ? "uniform" : std::string("adaptive ") + estimate_name(s.estimate);
-      if (s.refine == "uniform" || s.estimate == BakeSettings{}.estimate) keep.emplace(key, std::move(r));
+      keep.emplace(key, std::move(r));
     }
   }
 
@@ -286,15 +304,20 @@ int cmd_compare(int argc, char** argv) {
       const RowMatrixX3d corners = vertex_positions(r.mesh);
       RayScene scene(corners, r.mesh.triangles);
       SurfaceHits hits = trace_primary(scene, cam, fw, fh, topt.threads);
-      Image frame = shade_gouraud(hits, r.mesh.triangles, vertex_radiance(r.transfer, light, 0.8));
-      Image heat;
-      ImageError err = image_error(frame, reference, &heat);
-      std::string file = name == "uniform" ? "frame_uniform" : "frame_adaptive";
-      write_image(out_dir + "/" + file + ".png", frame);
-      write_image(out_dir + "/" + file + "_error.png", heat);
-      images[name + " (" + std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%)"] =
-          read_file_bytes(out_dir + "/" + file + ".png");
-      images["error of " + name] = read_file_bytes(out_dir + "/" + file + "_error.png");
+      const bool fitted_run = (r.point - r.transfer).cwiseAbs().maxCoeff() > 0;
+      for (const bool use_fit : {false, true}) {
+        if (use_fit && !fitted_run) continue;
+        const std::string label = name + (use_fit ? ", " + std::string(fit_method_name(base.fit.method)) : ", point");
+        Image frame = shade_gouraud(hits, r.mesh.triangles, vertex_radiance(use_fit ? r.transfer : r.point, light, 0.8));
+        Image heat;
+        ImageError err = image_error(frame, reference, &heat);
+        std::string file = std::string(name == "uniform" ? "frame_uniform" : "frame_adaptive") + (use_fit ? "_fit" : "_point");
+        write_image(out_dir + "/" + file + ".png", frame);
+        write_image(out_dir + "/" + file + "_error.png", heat);
+        images[label + " (" + std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%)"] =
+            read_file_bytes(out_dir + "/" + file + ".png");
+        images["error of " + label] = read_file_bytes(out_dir + "/" + file + "_error.png");
+      }
     }
     frame_note = "Frames at " + std::to_string(frame_count) + " triangles under " + light_specs[0] +
                  (light_specs.size() > 1 ? " + " + light_specs[1] : "") + "; the reference computes transfer at every pixel (" +
@@ -304,7 +327,7 @@ int cmd_compare(int argc, char** argv) {
   // The page.
   std::map<std::string, std::vector<std::pair<double, double>>> by_tri, by_time;
   for (const Row& r : rows) {
-    std::string name = r.method == "adaptive" ? "adaptive " + r.estimate : r.method;
+    std::string name = (r.method == "adaptive" ? "adaptive " + r.estimate : r.method) + (r.fit == "point" ? "" : " " + r.fit);
     if (r.method == "none") continue;
     by_tri[name].push_back({double(r.triangles), r.rms});
     by_time[name].push_back({r.seconds, r.rms});
@@ -318,7 +341,10 @@ int cmd_compare(int argc, char** argv) {
        << " triangles. Order " << topt.order << ", " << topt.rays << " rays per vertex, seed " << topt.seed
        << ". Error: surface RMS of ‖g − t<sub>ref</sub>‖ / ‖t<sub>unshadowed</sub>‖ at " << ref.points.rows()
        << " seeded area-stratified points, reference " << ref.rays << " rays (its own noise floor " << fmt(100 * ref.noise_floor, 3)
-       << "%). Vertex values: point sampled.</p>";
+       << "%). Vertex values: point sampled, and for uniform and the default estimate also "
+       << fit_method_name(base.fit.method) << (base.fit.method == FitMethod::LeastSquares ? " (alpha " + fmt(base.fit.alpha, 3) + ", " + regularizer_name(base.fit.regularizer) + " regulariser)" : std::string())
+       << " from " << fmt(base.samples.per_triangle, 3) << " surface samples per triangle with " << base.sample_rays
+       << " rays each; a fitted run's time includes its samples and solve.</p>";
   html << "<h2>Error against triangles</h2>" << svg_plot(by_tri, "triangles", "RMS error (%)");
   html << "<h2>Error against bake time</h2>" << svg_plot(by_time, "bake seconds", "RMS error (%)");
   html << "<h2>Runs</h2><table><tr><th>method</th><th>estimate</th><th>fit</th><th>triangles</th><th>vertices</th><th>RMS %</th>"
