@@ -18,6 +18,7 @@
 #include "cli/progress.h"
 #include "cli/report.h"
 #include "cli/compare.h"
+#include "cli/fit_table.h"
 #include "cli/pipeline.h"
 #include "prt/asset.h"
 #include "prt/evaluate.h"
@@ -514,7 +515,7 @@ int cmd_eval(int argc, char** argv) {
                  "Surface RMS transfer error of an asset, as a percentage of ||t_unshadowed||, at seeded area-\n"
                  "stratified points on its source surface against a reference with many more rays. Each point is\n"
                  "located in the asset through source_face, so any refinement can be judged on the same points.");
-  args.positional("ASSET", "a .ply asset written by prtsub bake", &input);
+  args.positional("ASSET", "a .ply asset written by prtsub bake (transfer or ao)", &input);
   args.option("--source", "INPUT", "the mesh the asset was baked from (required)", &source);
   args.option("--points", "N", "reference points", &points, 1, 10000000);
   args.option("--rays", "R", "reference rays per point (0: 8x the asset's rays)", &rays, 0, 1 << 20);
@@ -571,7 +572,8 @@ const char* kUsage =
     "  inspect   print and check what an asset holds, with its energy per SH band\n"
     "  bench     time the transfer stage against a bare Embree occlusion loop\n"
     "  compare   uniform against adaptive refinement: tables, plots and relit frames\n"
-    "  eval      surface RMS transfer error of an asset against a high-ray reference\n"
+    "  eval      surface RMS transfer error of an asset against a high-ray reference;\n"
+    "            eval --fits INPUT: point, average and least-squares values on one mesh\n"
     "  render    relight an asset into a frame (Gouraud, or the per-pixel reference)\n"
     "  diff      compare two frames: relative RMSE, PSNR and an error heat map\n"
     "\n"
@@ -598,7 +600,11 @@ int run_cli(int argc, char** argv) {
     if (command == "inspect") return cmd_inspect(argc, argv);
     if (command == "bench") return cmd_bench(argc, argv);
     if (command == "render") return cmd_render(argc, argv);
-    if (command == "eval") return cmd_eval(argc, argv);
+    if (command == "eval") {
+      for (int i = 2; i < argc; ++i)
+        if (std::strcmp(argv[i], "--fits") == 0) return cmd_eval_fits(argc, argv);
+      return cmd_eval(argc, argv);
+    }
     if (command == "compare") return cmd_compare(argc, argv);
     if (command == "diff") return cmd_diff(argc, argv);
     throw UsageError("unknown command '" + command + "' (try prtsub --help)");
