@@ -27,6 +27,18 @@ if(NOT TARGET OpenImageIO::OpenImageIO)
   target_link_libraries(OpenImageIO::OpenImageIO INTERFACE PkgConfig::OIIO)
 endif()
 
+# CHOLMOD (SuiteSparse) for the least-squares fit's factorisation: no CMake or pkg-config file
+# in Debian, so find the header and the library. Its supernodal factorisation runs on BLAS:
+# .ci/deps installs OpenBLAS, ~3x faster than Debian's reference BLAS (STACK.md).
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
+if(NOT TARGET SuiteSparse::CHOLMOD)
+  add_library(SuiteSparse::CHOLMOD SHARED IMPORTED)
+  set_target_properties(SuiteSparse::CHOLMOD PROPERTIES
+    IMPORTED_LOCATION "${CHOLMOD_LIBRARY}"
+    INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}")
+endif()
+
 if(PRTSUB_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()

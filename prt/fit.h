@@ -27,6 +27,9 @@ struct FitOptions {
   Regularizer regularizer = Regularizer::Edge;
   double alpha = 0.1;  //!< weight of the regulariser; 0 is the plain least-squares optimum
   MassMatrix mass = MassMatrix::Analytic;
+  //! Analytic mass: estimate b as A·prior + Monte Carlo of ∫h_i (f − g_prior), so that b's
+  //! sampling error scales with f − g_prior instead of f (off: the paper's plain estimate).
+  bool control_variate = true;
   int threads = 0;     //!< for the solves of many right-hand sides; 0: every core
 };
 
