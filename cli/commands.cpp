@@ -27,6 +27,8 @@
 #include "prt/render.h"
 #include "prt/ray_scene.h"
 #include "prt/sh.h"
+#include "prt/sampling.h"
+#include "prt/surface_samples.h"
 #include "prt/transfer.h"
 #include "subdiv/mesh_io.h"
 
@@ -291,6 +293,57 @@ int cmd_inspect(int argc, char** argv) {
   return bad_normals ? 1 : 0;
 }
 
+// bench --solve: the fit's cost alone, best of `repeat` runs, on pseudo-random sample values.
+int bench_solve(const CommonOptions& c, const Mesh& mesh, const BakeSettings& b, int repeat) {
+  Stopwatch clock;
+  SurfaceSamples samples = make_surface_samples(mesh, b.samples);
+  const double t_samples = clock.lap();
+  const Eigen::Index K = sh_count(c.transfer.order);
+  RowMatrixXd values(static_cast<Eigen::Index>(samples.size()), K), prior(static_cast<Eigen::Index>(mesh.num_vertices()), K);
+  Rng rng(c.transfer.seed, 0);
+  for (Eigen::Index i = 0; i < values.size(); ++i) values.data()[i] = rng.uniform();
+  for (Eigen::Index i = 0; i < prior.size(); ++i) prior.data()[i] = rng.uniform();
+  FitOptions o = b.fit;
+  o.method = FitMethod::LeastSquares;
+  FitStats best;
+  double best_total = INFINITY;
+  std::printf("prtsub bench --solve: %s, %zu vertices, %zu samples, %lld right-hand sides, %s regulariser, alpha %g, %s mass\n",
+              c.input.c_str(), mesh.num_vertices(), samples.size(), static_cast<long long>(K), regularizer_name(o.regularizer),
+              o.alpha, mass_matrix_name(o.mass));
+  for (int i = 0; i < repeat; ++i) {
+    FitStats st;
+    fit_vertex_values(mesh, samples, values, prior, o, &st);
+    const double total = st.seconds_assemble + st.seconds_factor + st.seconds_solve;
+    std::printf("  run %d: %.3f s (assemble %.3f, factor %.3f, solve %.3f)\n", i + 1, total, st.seconds_assemble, st.seconds_factor,
+                st.seconds_solve);
+    if (total < best_total) best_total = total, best = st;
+  }
+  std::printf("  best:       %.3f s; system %zu non-zeros, factor %zu entries, %.1f MiB; peak memory %.0f MiB\n", best_total,
+              best.system_nonzeros, best.factor_nonzeros, best.solve_memory_mib, peak_memory_mib());
+  if (!c.report.empty()) {
+    Report r;
+    r.set("command", "bench --solve");
+    r.set("input", c.input);
+    r.set("vertices", static_cast<uint64_t>(mesh.num_vertices()));
+    r.set("samples", static_cast<uint64_t>(samples.size()));
+    r.set("right_hand_sides", static_cast<int64_t>(K));
+    r.set("alpha", o.alpha);
+    r.set("regularizer", regularizer_name(o.regularizer));
+    r.set("mass", mass_matrix_name(o.mass));
+    r.set("seconds_samples", t_samples);
+    r.set("seconds_fit_best", best_total);
+    r.set("seconds_fit_assemble", best.seconds_assemble);
+    r.set("seconds_fit_factor", best.seconds_factor);
+    r.set("seconds_fit_solve", best.seconds_solve);
+    r.set("fit_system_nonzeros", static_cast<uint64_t>(best.system_nonzeros));
+    r.set("fit_factor_nonzeros", static_cast<uint64_t>(best.factor_nonzeros));
+    r.set("solve_memory_mib", best.solve_memory_mib);
+    r.set("peak_memory_mib", peak_memory_mib());
+    r.write(c.report);
+  }
+  return 0;
+}
+
 int cmd_bench(int argc, char** argv) {
   CommonOptions c;
   int repeat = 2;
@@ -299,26 +352,43 @@ int cmd_bench(int argc, char** argv) {
                  "from the same points with the same threads, alternating runs; the best run of each counts.");
   add_common(args, c);
   args.option("--repeat", "N", "runs of each, alternated", &repeat, 1, 100);
+  std::string at = "vertices";
+  args.option("--at", "vertices|samples", "trace from the vertices, or from the fit's surface samples [default vertices]", &at);
+  bool solve = false;
+  args.flag("--solve", "instead, time the least-squares fit's assembly, factorisation and solve for order² right-hand\n"
+            "sides (values need no rays: the cost does not depend on them)", &solve);
+  FitCli fit;
+  fit.add(args);
   if (!args.parse(argc, argv, 2)) return 0;
+  if (at != "vertices" && at != "samples") throw UsageError("--at must be vertices or samples, got '" + at + "'");
   check_transfer_options(c.transfer);
   if (!c.report.empty()) check_writable(c.report);
+  BakeSettings settings;
+  settings.transfer = c.transfer;
+  fit.apply(settings);
 
   Stopwatch clock;
   Mesh mesh = load_mesh(c.input, LoadOptions{c.crease_angle});
   const double t_load = clock.lap();
+  if (solve) return bench_solve(c, mesh, settings, repeat);
   RayScene scene(mesh.positions, position_triangles(mesh));
   const double t_scene = clock.lap();
-  RowMatrixX3d points = vertex_positions(mesh);
-  const RowMatrixX3d offsets = vertex_offset_directions(mesh);
+  RowMatrixX3d points, normals, offsets;
+  if (at == "samples") {
+    SurfaceSamples samples = make_surface_samples(mesh, settings.samples);
+    points = std::move(samples.points), normals = std::move(samples.normals), offsets = std::move(samples.offsets);
+  } else {
+    points = vertex_positions(mesh), normals = mesh.normals, offsets = vertex_offset_directions(mesh);
+  }
 
   double best_transfer = INFINITY, best_bare = INFINITY;
   uint64_t rays = 0, occluded = 0;
-  std::printf("prtsub bench: %s, %zu vertices, order %d, %d rays per vertex\n", c.input.c_str(), mesh.num_vertices(),
-              c.transfer.order, c.transfer.rays);
+  std::printf("prtsub bench: %s, %lld %s, order %d, %d rays each\n", c.input.c_str(), static_cast<long long>(points.rows()),
+              at == "samples" ? "surface samples" : "vertices", c.transfer.order, c.transfer.rays);
   for (int i = 0; i < repeat; ++i) {
     TransferStats bare, full;
-    occluded = bare_occlusion_loop(scene, points, mesh.normals, c.transfer, &bare, &offsets);
-    shadowed_transfer(scene, points, mesh.normals, c.transfer, &full, {}, &offsets);
+    occluded = bare_occlusion_loop(scene, points, normals, c.transfer, &bare, &offsets);
+    shadowed_transfer(scene, points, normals, c.transfer, &full, {}, &offsets);
     rays = full.rays;
     best_bare = std::min(best_bare, bare.seconds);
     best_transfer = std::min(best_transfer, full.seconds);
@@ -338,6 +408,8 @@ int cmd_bench(int argc, char** argv) {
     r.set("threads", c.transfer.threads);
     r.set("vertices", static_cast<uint64_t>(mesh.num_vertices()));
     r.set("triangles", static_cast<uint64_t>(mesh.num_faces()));
+    r.set("at", at);
+    r.set("points", static_cast<uint64_t>(points.rows()));
     r.set("rays", rays);
     r.set("repeat", repeat);
     r.set("occluded_fraction", static_cast<double>(occluded) / static_cast<double>(rays));

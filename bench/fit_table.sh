@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# The least-squares paper's Table 1 on every scene: E_point, E_avg, E_lsq (alpha 0) and E(alpha)
+# for ambient occlusion and order-4 transfer, with ray-casting and solve time and memory.
+# usage: bash bench/fit_table.sh BUILD_DIR SCENES_DIR OUT_DIR   (then: python3 bench/summarize_fits.py OUT_DIR)
+set -euo pipefail
+build=$1 scenes=$2 out=$3
+mkdir -p "$out"
+for scene in "$scenes"/*.obj "$scenes"/*.ply; do
+  name=$(basename "${scene%.*}")
+  for signal in ao transfer; do
+    echo "== $name $signal"
+    "$build/prtsub" eval --fits "$scene" --signal "$signal" --report "$out/${name}_${signal}.json" | tail -6
+  done
+done
