@@ -11,6 +11,8 @@ void FitCli::add(ArgParser& args) {
   args.option("--alpha", "A", "lsq: regulariser weight; 0 is the plain least-squares optimum [default 0.1]", &settings.fit.alpha, 0.0, 1e12);
   args.option("--regularizer", "edge|gradient", "lsq: penalise gradient jumps across edges, or gradients [default edge]", &regularizer);
   args.option("--mass", "analytic|sampled", "lsq: exact mass matrix, or the samples' own [default analytic]", &mass);
+  args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"
+            "variate (for comparison; noisier)", &no_control_variate);
   args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle [default 16]", &settings.samples.per_triangle, 0.0, 1e6);
   args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &settings.samples.density, 0.0, 1e30);
   args.option("--min-samples", "M", "fit: samples every triangle gets at least [default 1]", &min_samples, 0, 1 << 20);
@@ -29,6 +31,7 @@ void FitCli::apply(BakeSettings& b) const {
     throw UsageError(e.what());
   }
   b.fit.threads = b.transfer.threads;
+  b.fit.control_variate = !no_control_variate;
   b.samples = settings.samples;
   b.samples.min_per_triangle = static_cast<size_t>(min_samples);
   b.samples.seed = mix64(b.transfer.seed + 17);

@@ -15,6 +15,7 @@ namespace prtsub {
 struct FitCli {
   std::string signal = "transfer", fit = "lsq", regularizer = "edge", mass = "analytic";
   int min_samples = 1;
+  bool no_control_variate = false;
   BakeSettings settings;  //!< holds the numeric options' values and defaults
   void add(ArgParser& args);
   //! Copies the options into b (after b.transfer is set: the sample seed derives from it).

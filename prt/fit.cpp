@@ -268,14 +268,47 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const R
   auto clock = std::chrono::steady_clock::now();
   check_samples(mesh, s);
   const std::vector<FaceGeometry> geom = all_face_geometry(mesh);
-  // Lumped masses: ∫h_i over sampled faces, and the samples' own Σ_j w_j h_i(p_j).
+  // One pass over the samples, face by face: the lumped masses (∫h_i over sampled faces, and
+  // the samples' own Σ_j w_j h_i(p_j)), b = Σ_j w_j h_i(p_j) f(p_j), and for the control
+  // variate each face's sampled mass block.
+  if (static_cast<size_t>(values.rows()) != s.size()) throw InputError("fit: one row of values per sample expected");
+  const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
+  // b estimates ∫h_i f with an error proportional to f itself, not to its variation, and A⁻¹
+  // amplifies it: even a constant f comes back noisy. With the control variate we estimate
+  // ∫h_i (f − g_prior) from the samples and add back the exact ∫h_i g_prior = A·prior: the error
+  // is then proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
   Eigen::VectorXd lumped_analytic = Eigen::VectorXd::Zero(V), lumped_sampled = Eigen::VectorXd::Zero(V);
-  for (size_t f = 0; f < mesh.num_faces(); ++f)
-    if (face_has_samples(s, f))
-      for (uint32_t v : mesh.triangles[f]) lumped_analytic[v] += geom[f].area / 3;
-  for (size_t k = 0; k < s.size(); ++k)
-    for (int c = 0; c < 3; ++c)
-      lumped_sampled[mesh.triangles[s.face[k]][c]] += s.weight[k] * s.barycentric(static_cast<Eigen::Index>(k), c);
+  RowMatrixXd b = RowMatrixXd::Zero(V, K);
+  std::vector<double> local(static_cast<size_t>(3 * K));
+  for (size_t f = 0; f < mesh.num_faces(); ++f) {
+    if (!face_has_samples(s, f)) continue;
+    const Triangle& tri = mesh.triangles[f];
+    double ls[3] = {0, 0, 0}, ms[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    std::fill(local.begin(), local.end(), 0.0);
+    for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) {
+      const auto r = static_cast<Eigen::Index>(k);
+      const double* fv = values.row(r).data();
+      for (int c = 0; c < 3; ++c) {
+        const double wh = s.weight[k] * s.barycentric(r, c);
+        ls[c] += wh;
+        for (int c2 = 0; c2 < 3; ++c2) ms[c][c2] += wh * s.barycentric(r, c2);
+        double* out = local.data() + c * K;
+        for (Eigen::Index q = 0; q < K; ++q) out[q] += wh * fv[q];
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      lumped_analytic[tri[c]] += geom[f].area / 3;
+      lumped_sampled[tri[c]] += ls[c];
+      double* row = b.row(tri[c]).data();
+      for (Eigen::Index q = 0; q < K; ++q) row[q] += local[size_t(c * K + q)];
+      if (!use_cv) continue;
+      for (int c2 = 0; c2 < 3; ++c2) {
+        const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0) - ms[c][c2];
+        const double* p = prior.row(tri[c2]).data();
+        for (Eigen::Index q = 0; q < K; ++q) row[q] += coeff * p[q];
+      }
+    }
+  }
   const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? lumped_analytic : lumped_sampled;
   // A vertex is supported when its lumped mass is a meaningful share of a typical one.
   const double typical = lumped.sum() / static_cast<double>(std::max<Eigen::Index>(V, 1));
@@ -284,8 +317,6 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const R
     free[size_t(i)] = lumped[i] > 1e-12 * typical;
     stats.unsupported += !free[size_t(i)];
   }
-  RowMatrixXd b = fit_right_hand_side(mesh, s, values);
-
   RowMatrixXd x = prior;
   if (o.method == FitMethod::Average) {
     // Normalised by the samples' own Σ w h_i rather than ∫ h_i: a true weighted average, which
@@ -295,16 +326,6 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const R
     stats.seconds_assemble = seconds_since(clock);
     if (stats_out) *stats_out = stats;
     return x;
-  }
-
-  if (o.mass == MassMatrix::Analytic && o.control_variate) {
-    // b estimates ∫h_i f with an error proportional to f itself, not to its variation, and A⁻¹
-    // amplifies it: even a constant f comes back noisy. Estimating instead ∫h_i (f − g_prior)
-    // with the same samples and adding back the exact ∫h_i g_prior = A·prior leaves an error
-    // proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
-    auto apply = [&](uint32_t i, uint32_t j, double v) { b.row(i) += v * prior.row(j); };
-    emit_mass(mesh, geom, s, MassMatrix::Analytic, 1.0, apply);
-    emit_mass(mesh, geom, s, MassMatrix::Sampled, -1.0, apply);
   }
 
   // The system over free vertices (renumbered 0..n-1), lower triangle; the fixed ones' columns

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include "helpers.h"
@@ -82,6 +84,36 @@ TEST_F(Cli, AmbientOcclusionAssetsHoldOneClampedValuePerVertex) {
   EXPECT_EQ(read_file_bytes(out).find("property float t0"), std::string::npos);
   EXPECT_EQ(run({"bake", in, "-o", out, "--signal", "light"}), 2);
   EXPECT_EQ(run({"bake", in, "-o", out, "--fit", "spline"}), 2);
+}
+
+TEST_F(Cli, EvalFitsReportsThePapersFourErrorsAndBenchTimesTheFit) {
+  // A coarse sphere over a plane: the fit's home ground. The four columns come from one set of
+  // rays; on this scene the paper's ordering holds with room to spare.
+  std::string in = dir.path("fits.obj"), rep = dir.path("f.json");
+  test::write_obj(in, test::merge(test::icosphere(1), test::quad(3.0, -1.3, true)));
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"eval", "--fits", in, "--signal", "ao", "--points", "3000", "--report", rep}), 0);
+  testing::internal::GetCapturedStdout();
+  const std::string json = read_file_bytes(rep);
+  auto number = [&](const std::string& key) {
+    const size_t at = json.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << key;
+    return at == std::string::npos ? NAN : std::atof(json.c_str() + at + key.size() + 4);
+  };
+  const double point = number("e_point_percent"), avg = number("e_avg_percent"), lsq = number("e_lsq_percent"),
+               alpha = number("e_alpha_percent");
+  EXPECT_LT(avg, point);
+  EXPECT_LT(lsq, avg);
+  EXPECT_LT(alpha, point);
+  EXPECT_GT(number("samples"), 82 * 16 - 1);
+  EXPECT_GE(number("solve_memory_mib_alpha"), 0.0);
+  EXPECT_GT(number("noise_floor_percent"), 0.0);
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({"bench", in, "--solve", "--repeat", "1", "--report", dir.path("s.json")}), 0);
+  EXPECT_EQ(run({"bench", in, "--at", "samples", "--rays", "8", "--repeat", "1", "--report", dir.path("b.json")}), 0);
+  testing::internal::GetCapturedStdout();
+  EXPECT_NE(read_file_bytes(dir.path("s.json")).find("\"seconds_fit_factor\""), std::string::npos);
+  EXPECT_NE(read_file_bytes(dir.path("b.json")).find("\"at\": \"samples\""), std::string::npos);
 }
 
 TEST_F(Cli, BadInputExitsNonZeroAndLeavesNoOutput) {
