@@ -16,3 +16,14 @@ for r in sorted(rows, key=lambda r: (r["signal"], r["triangles"])):
     print(f"| {name} | {r['signal']} | {r['triangles']} | {r['samples']} | {e[0]:.3f} | {e[1]:.3f} | {e[2]:.3f} | {e[3]:.3f} | "
           f"{r['seconds_rays_vertices']:.2f} + {r['seconds_rays_samples']:.2f} | {r['seconds_solve_alpha']:.3f} | "
           f"{r['solve_memory_mib_alpha']:.1f} | {holds} |")
+
+def count(pred):
+    return sum(1 for r in rows if pred(r))
+
+n = len(rows)
+print()
+print(f"E_lsq <= E_avg on {count(lambda r: r['e_lsq_percent'] <= r['e_avg_percent'])} of {n} rows; "
+      f"E_lsq <= E_point on {count(lambda r: r['e_lsq_percent'] <= r['e_point_percent'])}; "
+      f"E(alpha) < E_point on {count(lambda r: r['e_alpha_percent'] < r['e_point_percent'])}; "
+      f"E(alpha) <= E_avg on {count(lambda r: r['e_alpha_percent'] <= r['e_avg_percent'])}; "
+      f"the full order on {count(lambda r: r['e_lsq_percent'] <= r['e_alpha_percent'] <= r['e_avg_percent'] <= r['e_point_percent'])}.")

@@ -134,7 +134,7 @@ int cmd_bake(int argc, char** argv) {
   write_asset(output, res.mesh, res.transfer, res.metadata, b.signal);
   const double t_write = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write0).count();
   const double total = res.seconds_total + t_write;
-  const double transfer_seconds = res.seconds_transfer + res.refine.seconds_signal;
+  const double transfer_seconds = res.seconds_transfer + res.refine.seconds_signal + res.seconds_samples;
   const double rays_per_second = static_cast<double>(res.rays) / std::max(transfer_seconds, 1e-9);
   const Mesh& mesh = res.mesh;
 
