@@ -260,20 +260,27 @@ int cmd_inspect(int argc, char** argv) {
   }
   std::map<std::string, std::string> meta(a.metadata.begin(), a.metadata.end());
   std::printf("prtsub inspect: %s\n", input.c_str());
-  std::printf("  vertices:   %lld\n  triangles:  %zu\n  sh order:   %d (%d coefficients per vertex)\n",
-              static_cast<long long>(V), a.triangles.size(), a.order, sh_count(a.order));
+  const bool ao = a.signal == AssetSignal::Ao;
+  std::printf("  vertices:   %lld\n  triangles:  %zu\n", static_cast<long long>(V), a.triangles.size());
+  if (ao)
+    std::printf("  signal:     ambient occlusion, one ao per vertex, from %.4f to %.4f (mean %.4f)\n",
+                V ? a.transfer.minCoeff() * kAoPerT0 : 0.0, V ? a.transfer.maxCoeff() * kAoPerT0 : 0.0,
+                V ? a.transfer.mean() * kAoPerT0 : 0.0);
+  else
+    std::printf("  sh order:   %d (%d coefficients per vertex)\n", a.order, sh_count(a.order));
   for (const auto& [k, v] : a.metadata) std::printf("  meta:       %s %s\n", k.c_str(), v.c_str());
   std::printf("  checks:     finite values, indices in range, %zu of %lld normals not unit length\n", bad_normals,
               static_cast<long long>(V));
-  std::printf("  energy by band (sum over vertices of squared coefficients):\n");
+  if (!ao) std::printf("  energy by band (sum over vertices of squared coefficients):\n");
   cumulative = 0;
-  for (int l = 0; l < a.order; ++l) {
+  for (int l = 0; l < a.order && !ao; ++l) {
     cumulative += band[static_cast<size_t>(l)];
     std::printf("    l=%d  %6.3f%%  cumulative %7.3f%%\n", l, total > 0 ? 100 * band[static_cast<size_t>(l)] / total : 0.0,
                 total > 0 ? 100 * cumulative / total : 0.0);
   }
-  std::printf("  order holding 99%% of the energy: %d%s\n", order99,
-              order99 < a.order ? " (a lower --order would do for this scene)" : "");
+  if (!ao)
+    std::printf("  order holding 99%% of the energy: %d%s\n", order99,
+                order99 < a.order ? " (a lower --order would do for this scene)" : "");
   if (meta.count("sh_order") && meta["sh_order"] != std::to_string(a.order))
     std::printf("  warning:    sh_order comment says %s\n", meta["sh_order"].c_str());
 
@@ -283,6 +290,7 @@ int cmd_inspect(int argc, char** argv) {
     r.set("input", input);
     r.set("vertices", static_cast<int64_t>(V));
     r.set("triangles", static_cast<uint64_t>(a.triangles.size()));
+    r.set("signal", ao ? "ao" : "transfer");
     r.set("order", a.order);
     r.set("order_99_percent_energy", order99);
     r.set("normals_not_unit", static_cast<uint64_t>(bad_normals));

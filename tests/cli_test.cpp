@@ -79,6 +79,11 @@ TEST_F(Cli, AmbientOcclusionAssetsHoldOneClampedValuePerVertex) {
     EXPECT_NE(json.find("\"signal\": \"ao\""), std::string::npos);
     EXPECT_EQ(run({"eval", out, "--source", in, "--points", "500"}), 0);
   }
+  // inspect and render take AO assets too.
+  EXPECT_EQ(run({"inspect", out, "--report", dir.path("i.json")}), 0);
+  EXPECT_NE(read_file_bytes(dir.path("i.json")).find("\"signal\": \"ao\""), std::string::npos);
+  EXPECT_EQ(run({"render", out, "--light", "sky", "-o", dir.path("ao.png"), "--size", "64,48"}), 0);
+  EXPECT_TRUE(test::file_exists(dir.path("ao.png")));
   // The ao property is what a consumer reads.
   EXPECT_NE(read_file_bytes(out).find("property float ao"), std::string::npos);
   EXPECT_EQ(read_file_bytes(out).find("property float t0"), std::string::npos);

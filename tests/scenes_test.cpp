@@ -2,6 +2,10 @@
 // tests skip and say so. CI has ../shared beside the checkout, and there they run.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <map>
 
 #include "cli/commands.h"
@@ -143,6 +147,38 @@ TEST(ScenesTransfer, CornellBoxHasContactShadowsAndNoNaN) {
   for (Eigen::Index v = 0; v < t.rows(); ++v) {
     EXPECT_LT(t(v, 0), open_dc * 0.999) << "vertex " << v;
     EXPECT_GT(t(v, 0), -1e-9) << "vertex " << v;
+  }
+}
+
+}  // namespace
+}  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+// The paper's claim on a real coarse scene: from the same rays and samples, the least-squares
+// fit beats the hat-weighted average, which beats point sampling, for AO and for transfer.
+// (BENCHMARKS.md measured 7.0 < 8.4 < 15.5% for AO and 11.9 < 14.6 < 23.1% for transfer; the
+// margins are far above the reference's 0.1–0.2% noise floor.)
+TEST(ScenesFit, CornellBoxOrdersLsqBelowAverageBelowPoint) {
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  test::TempDir tmp;
+  for (const char* signal : {"ao", "transfer"}) {
+    const std::string rep = tmp.path(std::string(signal) + ".json");
+    testing::internal::CaptureStdout();
+    ASSERT_EQ(test::run_prtsub({"eval", "--fits", dir + "/cornell_box.obj", "--signal", signal, "--points", "5000", "--report", rep}), 0);
+    testing::internal::GetCapturedStdout();
+    std::ifstream in(rep);
+    const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    auto number = [&](const std::string& key) {
+      const size_t at = json.find("\"" + key + "\": ");
+      return at == std::string::npos ? NAN : std::atof(json.c_str() + at + key.size() + 4);
+    };
+    const double point = number("e_point_percent"), avg = number("e_avg_percent"), lsq = number("e_lsq_percent");
+    EXPECT_LT(lsq, 0.9 * avg) << signal;
+    EXPECT_LT(avg, 0.7 * point) << signal;
+    EXPECT_LT(number("e_alpha_percent"), avg) << signal;
   }
 }
 
