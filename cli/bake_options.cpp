@@ -22,6 +22,7 @@ void FitCli::add(ArgParser& args) {
 void FitCli::apply(BakeSettings& b) const {
   b.signal = signal == "ao" ? AssetSignal::Ao : AssetSignal::Transfer;
   if (signal != "ao" && signal != "transfer") throw UsageError("--signal must be transfer or ao, got '" + signal + "'");
+  if (b.signal == AssetSignal::Ao) b.transfer.order = 1;  // AO is order-1 transfer, rescaled
   b.fit = settings.fit;
   try {
     b.fit.method = parse_fit_method(fit);

@@ -195,7 +195,7 @@ int cmd_compare(int argc, char** argv) {
   BakeSettings fitted;  // the fit options, applied to every run that fits
   fitted.transfer = topt;
   fit_cli.apply(fitted);
-  if (fitted.signal == AssetSignal::Ao) topt.order = 1;
+  topt.order = fitted.transfer.order;  // 1 for AO
   ro.order = topt.order;
   ro.threads = topt.threads;
   std::printf("prtsub compare: %s (%zu triangles), order %d, %d rays; reference %zu points x %d rays\n", input.c_str(),

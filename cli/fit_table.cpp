@@ -47,7 +47,6 @@ int cmd_eval_fits(int argc, char** argv) {
   b.input = input;
   b.load = LoadOptions{crease};
   fit.apply(b);
-  if (b.signal == AssetSignal::Ao) b.transfer.order = 1;
   const bool ao = b.signal == AssetSignal::Ao;
   const FitOptions requested = b.fit;
 
@@ -86,9 +85,8 @@ int cmd_eval_fits(int argc, char** argv) {
   ro.rays = ref_rays > 0 ? ref_rays : 8 * std::max(b.transfer.rays, b.sample_rays);
   ro.order = b.transfer.order;
   ro.threads = b.transfer.threads;
-  Mesh source = load_mesh(input, b.load);
-  RayScene source_scene(source.positions, position_triangles(source));
-  Reference ref = make_reference(source, source_scene, ro);
+  // The bake did not refine: its mesh and scene are the source's.
+  Reference ref = make_reference(mesh, scene, ro);
   const double seconds_reference = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   for (Column& c : columns) c.error = evaluate(ref, vertex_positions(mesh), mesh.triangles, mesh.source_face, c.values);
 

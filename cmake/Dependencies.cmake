@@ -6,16 +6,24 @@ find_package(TBB REQUIRED)
 find_package(embree 3.13 REQUIRED CONFIG)          # imported target: embree
 find_package(OpenMesh REQUIRED CONFIG)              # no version file: ask for none
 
+# A shared library Debian ships without a usable CMake config: find its header and library and
+# wrap them in an imported target.
+function(prtsub_import_library target header library)
+  cmake_parse_arguments(ARG "" "" "PATH_SUFFIXES" ${ARGN})
+  string(MAKE_C_IDENTIFIER "${target}" id)
+  find_path(${id}_INCLUDE_DIR ${header} PATH_SUFFIXES ${ARG_PATH_SUFFIXES} REQUIRED)
+  find_library(${id}_LIBRARY ${library} REQUIRED)
+  if(NOT TARGET ${target})
+    add_library(${target} SHARED IMPORTED)
+    set_target_properties(${target} PROPERTIES
+      IMPORTED_LOCATION "${${id}_LIBRARY}"
+      INTERFACE_INCLUDE_DIRECTORIES "${${id}_INCLUDE_DIR}")
+  endif()
+endfunction()
+
 # OpenSubdiv: Debian's config names a static libosdCPU.a that is not shipped, so the
 # package's config cannot be used. Far needs only the shared osdCPU library.
-find_path(OPENSUBDIV_INCLUDE_DIR opensubdiv/far/topologyRefinerFactory.h REQUIRED)
-find_library(OPENSUBDIV_CPU_LIBRARY osdCPU REQUIRED)
-if(NOT TARGET OpenSubdiv::osdCPU)
-  add_library(OpenSubdiv::osdCPU SHARED IMPORTED)
-  set_target_properties(OpenSubdiv::osdCPU PROPERTIES
-    IMPORTED_LOCATION "${OPENSUBDIV_CPU_LIBRARY}"
-    INTERFACE_INCLUDE_DIRECTORIES "${OPENSUBDIV_INCLUDE_DIR}")
-endif()
+prtsub_import_library(OpenSubdiv::osdCPU opensubdiv/far/topologyRefinerFactory.h osdCPU)
 
 # OpenImageIO: Debian's config cannot be used as it is. It lists /usr/include/opencv4 (there
 # only with OpenCV's dev package), and its targets name /usr/bin/iconvert and PyImath, which
@@ -28,16 +36,9 @@ if(NOT TARGET OpenImageIO::OpenImageIO)
 endif()
 
 # CHOLMOD (SuiteSparse) for the least-squares fit's factorisation: no CMake or pkg-config file
-# in Debian, so find the header and the library. Its supernodal factorisation runs on BLAS:
-# .ci/deps installs OpenBLAS, ~3x faster than Debian's reference BLAS (STACK.md).
-find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
-find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
-if(NOT TARGET SuiteSparse::CHOLMOD)
-  add_library(SuiteSparse::CHOLMOD SHARED IMPORTED)
-  set_target_properties(SuiteSparse::CHOLMOD PROPERTIES
-    IMPORTED_LOCATION "${CHOLMOD_LIBRARY}"
-    INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}")
-endif()
+# in Debian. Its supernodal factorisation runs on BLAS: .ci/deps installs OpenBLAS, ~3x faster
+# than Debian's reference BLAS (STACK.md).
+prtsub_import_library(SuiteSparse::CHOLMOD cholmod.h cholmod PATH_SUFFIXES suitesparse)
 
 if(PRTSUB_BUILD_TESTS)
   find_package(GTest REQUIRED)

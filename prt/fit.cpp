@@ -19,11 +19,14 @@
 //    sliver (|∇h| ~ 1/height) swamp the system; we weigh by 2·H², H = 2a_t a_u/(a_t + a_u)
 //    the harmonic mean of the areas: the paper's 2a² for equal areas, bounded entries for slivers.
 //
-// Solving: one sparse LDLᵀ factorisation (AMD ordering) for all K right-hand sides, solved in
-// parallel by column. Vertices that no sampled face touches are fixed at their prior (the point
-// sample) and moved to the right-hand side. If a pivot still collapses (α = 0 with the sampled
-// mass matrix, or faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
-// λ = 1e-9, 1e-6, 1e-3, 1 until every pivot keeps ten digits; the warning says which was needed.
+// With the analytic A, b is estimated through a control variate on the prior (the point samples):
+// A·prior plus the samples' estimate of ∫h_i (f − g_prior), so its error scales with f − g_prior.
+//
+// Solving: one CHOLMOD supernodal Cholesky factorisation (AMD ordering) of the Jacobi-scaled
+// system for all K right-hand sides. Vertices that no sampled face touches are fixed at their
+// prior and moved to the right-hand side. If the factorisation fails or its pivot ratio falls
+// below 1e-7 (α = 0 with the sampled mass matrix, faces of area ~1e-16), we add λ·D(x − prior)
+// with D the lumped mass, trying λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed.
 #include "prt/fit.h"
 
 #include <Eigen/CholmodSupport>
