@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Writes the two generated contact-shadow scenes of the refinement benchmark into DIR:
-spot_on_ground.obj (Spot's control mesh standing on a square ground quad) and
-icosphere_on_plane.obj (a level-1 icosphere resting on a two-triangle plane, as in the tests).
+"""Writes the generated scenes of the benchmarks into DIR: the two contact-shadow scenes of the
+refinement benchmark, spot_on_ground.obj (Spot's control mesh standing on a square ground quad)
+and icosphere_on_plane.obj (a level-1 icosphere resting on a two-triangle plane, as in the
+tests), and icosphere4.obj (a lone level-4 icosphere: smooth, unoccluded transfer for the fit).
 
 usage: make_scenes.py SHARED_SCENES_DIR OUT_DIR"""
 import math
@@ -52,7 +53,7 @@ def ground(verts, faces, up, half):
     faces.append((quad[0], quad[2], quad[3]))
 
 
-def icosphere():
+def icosphere(levels=1):
     t = (1 + math.sqrt(5)) / 2
     v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
          (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
@@ -71,11 +72,13 @@ def icosphere():
             mid[key] = len(v) - 1
         return mid[key]
 
-    g = []
-    for a, b, c in f:
-        ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
-        g += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-    return v, [(a + 1, b + 1, c + 1) for a, b, c in g]
+    for _ in range(levels):
+        g = []
+        for a, b, c in f:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            g += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f, mid = g, {}
+    return v, [(a + 1, b + 1, c + 1) for a, b, c in f]
 
 
 def main():
@@ -90,6 +93,8 @@ def main():
     n = len(v)
     f += [(n - 3, n - 2, n - 1), (n - 3, n - 1, n)]
     write_obj(os.path.join(out, "icosphere_on_plane.obj"), v, f, "level-1 icosphere resting on a two-triangle plane")
+    v, f = icosphere(4)
+    write_obj(os.path.join(out, "icosphere4.obj"), v, f, "level-4 icosphere, nothing else")
 
 
 if __name__ == "__main__":
