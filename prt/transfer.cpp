@@ -19,12 +19,17 @@
 // of (seed, point index, half): decorrelated between points and identical for any thread
 // count. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
 // 20-45% faster than single rays.
+//
+// Points can also be traced in consecutive groups that a callback consumes as soon as a group is
+// done (shadowed_transfer_groups): the fit reduces each group of surface samples to its face's
+// moments and never stores per-sample transfer. A group is traced by one thread, in order.
 #include "prt/transfer.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -39,7 +44,7 @@
 namespace prtsub {
 namespace {
 
-constexpr size_t kGrain = 16;  // points per task: small enough to balance, large enough to amortise
+constexpr Eigen::Index kGrain = 16;  // points per task: small enough to balance, large enough to amortise
 
 struct PointRays {
   std::vector<RTCRay> rays;
@@ -76,10 +81,10 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
 inline bool occluded(const RTCRay& r) { return r.tfar == -std::numeric_limits<float>::infinity(); }
 
 template <class Body>
-void parallel_points(Eigen::Index count, int threads, Body&& body) {
+void parallel_points(Eigen::Index count, int threads, Eigen::Index grain, Body&& body) {
   tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, count, kGrain), body);
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, count, grain), body);
   });
 }
 
@@ -97,55 +102,98 @@ void check_transfer_options(const TransferOptions& o) {
   if (o.threads < 0) throw InputError("--threads must be 0 (all cores) or more, got " + std::to_string(o.threads));
 }
 
+namespace {
+
+// One point's transfer into row (K values).
+void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
+                    const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, PointRays& buf, double* row) {
+  const int K = sh_count(opt.order);
+  double y[kMaxShOrder * kMaxShOrder];
+  double acc[kMaxShOrder * kMaxShOrder];
+  const uint32_t R = static_cast<uint32_t>(opt.rays);
+  trace_point(scene, points, normals, offsets, i, opt, buf);
+  // Visible counts of the even (A) and odd (B) halves.
+  uint32_t visible[2] = {0, 0}, size[2] = {(R + 1) / 2, R / 2};
+  for (uint32_t k = 0; k < R; ++k) visible[k & 1] += !occluded(buf.rays[k]);
+  // β of a half comes from the other half; with a single ray there is no other half.
+  double beta[2];
+  beta[0] = size[1] ? (2 * visible[1] >= size[1] ? 1.0 : 0.0) : 1.0;
+  beta[1] = 2 * visible[0] >= size[0] ? 1.0 : 0.0;
+  std::fill(acc, acc + K, 0.0);
+  for (uint32_t k = 0; k < R; ++k) {
+    double v = occluded(buf.rays[k]) ? 0.0 : 1.0;
+    double w = v - beta[k & 1];
+    if (w == 0.0) continue;
+    const Eigen::Vector3d& d = buf.directions[k];
+    sh_eval(opt.order, d.x(), d.y(), d.z(), y);
+    for (int c = 0; c < K; ++c) acc[c] += w * y[c];
+  }
+  const double scale = M_PI / R;
+  const double beta_mean = (size[0] * beta[0] + size[1] * beta[1]) / R;
+  if (beta_mean != 0.0) {
+    unshadowed_transfer(opt.order, normals.row(i).transpose(), row);
+    for (int c = 0; c < K; ++c) row[c] = beta_mean * row[c] + scale * acc[c];
+  } else {
+    for (int c = 0; c < K; ++c) row[c] = scale * acc[c];
+  }
+}
+
+void finish_stats(const RayScene& scene, TransferStats* stats, std::chrono::steady_clock::time_point t0, Eigen::Index points,
+                  int rays) {
+  scene.check("tracing transfer rays");
+  if (stats) {
+    stats->seconds = seconds_since(t0);
+    stats->rays = static_cast<uint64_t>(points) * static_cast<uint64_t>(rays);
+  }
+}
+
+}  // namespace
+
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& opt,
                               TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets) {
   check_transfer_options(opt);
-  const int K = sh_count(opt.order);
   const Eigen::Index P = points.rows();
-  RowMatrixXd out(P, K);
+  RowMatrixXd out(P, sh_count(opt.order));
   auto t0 = std::chrono::steady_clock::now();
-  parallel_points(P, opt.threads, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  parallel_points(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
-    double y[kMaxShOrder * kMaxShOrder];
-    double acc[kMaxShOrder * kMaxShOrder];
-    const uint32_t R = static_cast<uint32_t>(opt.rays);
-    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      trace_point(scene, points, normals, offsets, i, opt, buf);
-      // Visible counts of the even (A) and odd (B) halves.
-      uint32_t visible[2] = {0, 0}, size[2] = {(R + 1) / 2, R / 2};
-      for (uint32_t k = 0; k < R; ++k) visible[k & 1] += !occluded(buf.rays[k]);
-      // β of a half comes from the other half; with a single ray there is no other half.
-      double beta[2];
-      beta[0] = size[1] ? (2 * visible[1] >= size[1] ? 1.0 : 0.0) : 1.0;
-      beta[1] = 2 * visible[0] >= size[0] ? 1.0 : 0.0;
-      std::fill(acc, acc + K, 0.0);
-      for (uint32_t k = 0; k < R; ++k) {
-        double v = occluded(buf.rays[k]) ? 0.0 : 1.0;
-        double w = v - beta[k & 1];
-        if (w == 0.0) continue;
-        const Eigen::Vector3d& d = buf.directions[k];
-        sh_eval(opt.order, d.x(), d.y(), d.z(), y);
-        for (int c = 0; c < K; ++c) acc[c] += w * y[c];
-      }
-      const double scale = M_PI / R;
-      const double beta_mean = (size[0] * beta[0] + size[1] * beta[1]) / R;
-      double* row = out.row(i).data();
-      if (beta_mean != 0.0) {
-        unshadowed_transfer(opt.order, normals.row(i).transpose(), row);
-        for (int c = 0; c < K; ++c) row[c] = beta_mean * row[c] + scale * acc[c];
-      } else {
-        for (int c = 0; c < K; ++c) row[c] = scale * acc[c];
-      }
-    }
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i)
+      point_transfer(scene, points, normals, offsets, i, opt, buf, out.row(i).data());
     if (progress) progress(static_cast<size_t>(range.size()));
   });
-  scene.check("tracing transfer rays");
-  if (stats) {
-    stats->seconds = seconds_since(t0);
-    stats->rays = static_cast<uint64_t>(P) * static_cast<uint64_t>(opt.rays);
-  }
+  finish_stats(scene, stats, t0, P, opt.rays);
   return out;
+}
+
+void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
+                              const std::vector<size_t>& group_begin, const TransferOptions& opt, const GroupFn& consume,
+                              TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets) {
+  check_transfer_options(opt);
+  const Eigen::Index P = points.rows();
+  if (group_begin.empty() || group_begin.front() != 0 || group_begin.back() != static_cast<size_t>(P) ||
+      !std::is_sorted(group_begin.begin(), group_begin.end()))
+    throw InputError("transfer: point groups must partition the points in order");
+  const auto G = static_cast<Eigen::Index>(group_begin.size() - 1);
+  const int K = sh_count(opt.order);
+  // About kGrain points per task, whatever the groups' sizes.
+  const Eigen::Index grain = std::max<Eigen::Index>(1, G > 0 ? kGrain * G / std::max<Eigen::Index>(P, 1) : 1);
+  auto t0 = std::chrono::steady_clock::now();
+  parallel_points(G, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+    thread_local PointRays buf;
+    thread_local std::vector<double> values;
+    size_t done = 0;
+    for (Eigen::Index g = range.begin(); g != range.end(); ++g) {
+      const size_t first = group_begin[size_t(g)], last = group_begin[size_t(g) + 1];
+      values.resize((last - first) * size_t(K));
+      for (size_t i = first; i < last; ++i)
+        point_transfer(scene, points, normals, offsets, static_cast<Eigen::Index>(i), opt, buf, values.data() + (i - first) * size_t(K));
+      consume(size_t(g), values.data(), last - first);
+      done += last - first;
+    }
+    if (progress) progress(done);
+  });
+  finish_stats(scene, stats, t0, P, opt.rays);
 }
 
 uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
@@ -154,7 +202,7 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
   check_transfer_options(opt);
   std::atomic<uint64_t> hits{0};
   auto t0 = std::chrono::steady_clock::now();
-  parallel_points(points.rows(), opt.threads, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  parallel_points(points.rows(), opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     uint64_t local = 0;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "prt/ray_scene.h"
 
@@ -36,6 +37,19 @@ struct TransferStats {
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& options,
                               TransferStats* stats = nullptr, const ProgressFn& progress = {},
+                              const RowMatrixX3d* offsets = nullptr);
+
+//! Called from worker threads with one group's transfer: `rows` rows of N² values, row-major.
+using GroupFn = std::function<void(size_t group, const double* values, size_t rows)>;
+
+//! The same transfer, handed over group by group instead of stored: group g is points
+//! group_begin[g] .. group_begin[g+1]-1, and consume sees each group once, from some worker.
+//! For reductions (the fit's per-face moments) that need not keep every point's result. One
+//! thread traces a whole group: keep groups small (tens of points) or the cores go idle.
+//! \throw InputError unless group_begin runs from 0 to #P without decreasing
+void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
+                              const std::vector<size_t>& group_begin, const TransferOptions& options,
+                              const GroupFn& consume, TransferStats* stats = nullptr, const ProgressFn& progress = {},
                               const RowMatrixX3d* offsets = nullptr);
 
 //! The baseline for benchmarks: the same rays from the same points with the same thread
