@@ -11,6 +11,8 @@ void FitCli::add(ArgParser& args) {
   args.option("--alpha", "A", "lsq: regulariser weight; 0 is the plain least-squares optimum [default 0.1]", &settings.fit.alpha, 0.0, 1e12);
   args.option("--regularizer", "edge|gradient", "lsq: penalise gradient jumps across edges, or gradients [default edge]", &regularizer);
   args.option("--mass", "analytic|sampled", "lsq: exact mass matrix, or the samples' own [default analytic]", &mass);
+  args.option("--solver", "auto|cholmod", "lsq: conjugate gradients (analytic mass; CHOLMOD if they stall), or always a\n"
+              "CHOLMOD Cholesky factorisation [default auto]", &solver);
   args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"
             "variate (for comparison; noisier)", &no_control_variate);
   args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle [default 16]", &settings.samples.per_triangle, 0.0, 1e6);
@@ -28,6 +30,7 @@ void FitCli::apply(BakeSettings& b) const {
     b.fit.method = parse_fit_method(fit);
     b.fit.regularizer = parse_regularizer(regularizer);
     b.fit.mass = parse_mass_matrix(mass);
+    b.fit.solver = parse_fit_solver(solver);
   } catch (const InputError& e) {
     throw UsageError(e.what());
   }
@@ -69,6 +72,8 @@ void add_fit_report(Report& r, const BakeResult& res, const BakeSettings& b) {
   r.set("alpha", b.fit.alpha);
   r.set("regularizer", regularizer_name(b.fit.regularizer));
   r.set("mass", mass_matrix_name(b.fit.mass));
+  r.set("fit_solver", res.fit.solver);
+  r.set("fit_cg_iterations", res.fit.cg_iterations);
   r.set("fit_unsupported_vertices", static_cast<uint64_t>(res.fit.unsupported));
   r.set("fit_stabilizer", res.fit.stabilizer);
   r.set("fit_system_nonzeros", static_cast<uint64_t>(res.fit.system_nonzeros));

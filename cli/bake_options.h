@@ -13,7 +13,7 @@ namespace prtsub {
 
 //! The signal and fit options, declared once for every command that bakes.
 struct FitCli {
-  std::string signal = "transfer", fit = "lsq", regularizer = "edge", mass = "analytic";
+  std::string signal = "transfer", fit = "lsq", regularizer = "edge", mass = "analytic", solver = "auto";
   int min_samples = 1;
   bool no_control_variate = false;
   BakeSettings settings;  //!< holds the numeric options' values and defaults

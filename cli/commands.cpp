@@ -90,6 +90,12 @@ void add_common(ArgParser& args, CommonOptions& c) {
   args.option("--report", "R.json", "also write a flat JSON report", &c.report);
 }
 
+// ", 31 CG iterations", or the iterations CG spent before CHOLMOD took over.
+std::string cg_note(const FitStats& f) {
+  if (f.cg_iterations == 0) return "";
+  return ", " + std::to_string(f.cg_iterations) + (f.solver == "cg" ? " CG iterations" : " CG iterations first");
+}
+
 int cmd_bake(int argc, char** argv) {
   CommonOptions c;
   BakeSettings b;
@@ -216,8 +222,9 @@ int cmd_bake(int argc, char** argv) {
     std::printf("  fit:        least squares, %s regulariser, alpha %g, %s mass; %zu surface samples (%d rays each, %.3f s)\n",
                 regularizer_name(b.fit.regularizer), b.fit.alpha, mass_matrix_name(b.fit.mass), res.fit_data.samples.size(),
                 b.sample_rays, res.seconds_samples);
-    std::printf("              solve %.3f s (assemble %.3f, factor %.3f, solve %.3f), %.1f MiB; %zu vertices unsupported\n",
-                res.seconds_fit, f.seconds_assemble, f.seconds_factor, f.seconds_solve, f.solve_memory_mib, f.unsupported);
+    std::printf("              solve %.3f s (assemble %.3f, factor %.3f, solve %.3f; %s%s), %.1f MiB; %zu vertices unsupported\n",
+                res.seconds_fit, f.seconds_assemble, f.seconds_factor, f.seconds_solve, f.solver.c_str(),
+                cg_note(f).c_str(), f.solve_memory_mib, f.unsupported);
   }
   std::printf("  rays:       %llu in %.3f s (%.2f Mrays/s)\n", static_cast<unsigned long long>(res.rays), transfer_seconds,
               rays_per_second / 1e6);
@@ -301,15 +308,18 @@ int cmd_inspect(int argc, char** argv) {
   return bad_normals ? 1 : 0;
 }
 
-// bench --solve: the fit's cost alone, best of `repeat` runs, on pseudo-random sample values.
+// bench --solve: the fit's cost alone, best of `repeat` runs, on pseudo-random face moments.
 int bench_solve(const CommonOptions& c, const Mesh& mesh, const BakeSettings& b, int repeat) {
   Stopwatch clock;
   SurfaceSamples samples = make_surface_samples(mesh, b.samples);
   const double t_samples = clock.lap();
   const Eigen::Index K = sh_count(c.transfer.order);
-  RowMatrixXd values(static_cast<Eigen::Index>(samples.size()), K), prior(static_cast<Eigen::Index>(mesh.num_vertices()), K);
+  // The bake reduces the samples' transfer to face moments while tracing (bench --at samples
+  // times that); the fit starts from the moments.
+  FaceMoments moments{RowMatrixXd(static_cast<Eigen::Index>(3 * mesh.num_faces()), K)};
+  RowMatrixXd prior(static_cast<Eigen::Index>(mesh.num_vertices()), K);
   Rng rng(c.transfer.seed, 0);
-  for (Eigen::Index i = 0; i < values.size(); ++i) values.data()[i] = rng.uniform();
+  for (Eigen::Index i = 0; i < moments.rows.size(); ++i) moments.rows.data()[i] = rng.uniform();
   for (Eigen::Index i = 0; i < prior.size(); ++i) prior.data()[i] = rng.uniform();
   FitOptions o = b.fit;
   o.method = FitMethod::LeastSquares;
@@ -320,10 +330,10 @@ int bench_solve(const CommonOptions& c, const Mesh& mesh, const BakeSettings& b,
               o.alpha, mass_matrix_name(o.mass));
   for (int i = 0; i < repeat; ++i) {
     FitStats st;
-    fit_vertex_values(mesh, samples, values, prior, o, &st);
+    fit_vertex_values(mesh, samples, moments, prior, o, &st);
     const double total = st.seconds_assemble + st.seconds_factor + st.seconds_solve;
-    std::printf("  run %d: %.3f s (assemble %.3f, factor %.3f, solve %.3f)\n", i + 1, total, st.seconds_assemble, st.seconds_factor,
-                st.seconds_solve);
+    std::printf("  run %d: %.3f s (assemble %.3f, factor %.3f, solve %.3f; %s%s)\n", i + 1, total, st.seconds_assemble,
+                st.seconds_factor, st.seconds_solve, st.solver.c_str(), cg_note(st).c_str());
     if (total < best_total) best_total = total, best = st;
   }
   std::printf("  best:       %.3f s; system %zu non-zeros, factor %zu entries, %.1f MiB; peak memory %.0f MiB\n", best_total,
@@ -343,6 +353,8 @@ int bench_solve(const CommonOptions& c, const Mesh& mesh, const BakeSettings& b,
     r.set("seconds_fit_assemble", best.seconds_assemble);
     r.set("seconds_fit_factor", best.seconds_factor);
     r.set("seconds_fit_solve", best.seconds_solve);
+    r.set("fit_solver", best.solver);
+    r.set("fit_cg_iterations", best.cg_iterations);
     r.set("fit_system_nonzeros", static_cast<uint64_t>(best.system_nonzeros));
     r.set("fit_factor_nonzeros", static_cast<uint64_t>(best.factor_nonzeros));
     r.set("solve_memory_mib", best.solve_memory_mib);
@@ -381,13 +393,23 @@ int cmd_bench(int argc, char** argv) {
   if (solve) return bench_solve(c, mesh, settings, repeat);
   RayScene scene(mesh.positions, position_triangles(mesh));
   const double t_scene = clock.lap();
-  RowMatrixX3d points, normals, offsets;
+  SurfaceSamples samples;
+  RowMatrixX3d vertex_points, vertex_normals, vertex_offsets;
   if (at == "samples") {
-    SurfaceSamples samples = make_surface_samples(mesh, settings.samples);
-    points = std::move(samples.points), normals = std::move(samples.normals), offsets = std::move(samples.offsets);
+    samples = make_surface_samples(mesh, settings.samples);
   } else {
-    points = vertex_positions(mesh), normals = mesh.normals, offsets = vertex_offset_directions(mesh);
+    vertex_points = vertex_positions(mesh), vertex_normals = mesh.normals, vertex_offsets = vertex_offset_directions(mesh);
   }
+  const bool at_samples = at == "samples";
+  const RowMatrixX3d& points = at_samples ? samples.points : vertex_points;
+  const RowMatrixX3d& normals = at_samples ? samples.normals : vertex_normals;
+  const RowMatrixX3d& offsets = at_samples ? samples.offsets : vertex_offsets;
+  // The stage as the bake runs it: at the samples, each face's transfer is reduced to the
+  // fit's moments as it is traced.
+  auto transfer = [&](TransferStats& stats) {
+    if (at_samples) trace_face_moments(mesh, scene, samples, c.transfer, &stats);
+    else shadowed_transfer(scene, points, normals, c.transfer, &stats, {}, &offsets);
+  };
 
   double best_transfer = INFINITY, best_bare = INFINITY;
   uint64_t rays = 0, occluded = 0;
@@ -396,7 +418,7 @@ int cmd_bench(int argc, char** argv) {
   for (int i = 0; i < repeat; ++i) {
     TransferStats bare, full;
     occluded = bare_occlusion_loop(scene, points, normals, c.transfer, &bare, &offsets);
-    shadowed_transfer(scene, points, normals, c.transfer, &full, {}, &offsets);
+    transfer(full);
     rays = full.rays;
     best_bare = std::min(best_bare, bare.seconds);
     best_transfer = std::min(best_transfer, full.seconds);

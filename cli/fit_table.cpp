@@ -73,7 +73,7 @@ int cmd_eval_fits(int argc, char** argv) {
   columns[3].name = "alpha", columns[3].options = requested, columns[3].options.method = FitMethod::LeastSquares;
   size_t clamped = 0;
   for (Column& c : columns) {
-    c.values = fit_vertex_values(mesh, data.samples, data.values, base.transfer, c.options, &c.stats);
+    c.values = fit_vertex_values(mesh, data.samples, data.moments, base.transfer, c.options, &c.stats);
     if (ao) {
       const size_t n = clamp_ao(c.values);
       if (&c == &columns[3]) clamped = n;

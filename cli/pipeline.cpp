@@ -5,6 +5,7 @@
 
 #include "prt/ray_scene.h"
 #include "prt/sampling.h"
+#include "prt/sh.h"
 #include "subdiv/exceptions.h"
 
 namespace prtsub {
@@ -27,6 +28,36 @@ size_t clamp_ao(RowMatrixXd& t0) {
   return moved;
 }
 
+FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& samples,
+                               const TransferOptions& options, TransferStats* stats, const ProgressFn& progress) {
+  // Samples are traced in chunks of at most kChunk, each reduced to its three moment rows as
+  // soon as it is traced: storing every sample's transfer would cost a row per sample and the
+  // time to write it. A face's chunks are then summed in order, so the result does not depend
+  // on the threads; chunks rather than faces, because one face may hold most of the samples
+  // (a floor) and one thread traces a chunk.
+  constexpr size_t kChunk = 64;
+  const size_t F = mesh.num_faces();
+  std::vector<size_t> chunk_begin{0}, first_chunk(F + 1, 0);
+  for (size_t f = 0; f < F; ++f) {
+    first_chunk[f] = chunk_begin.size() - 1;
+    for (size_t k = samples.begin[f]; k < samples.begin[f + 1]; k += kChunk) chunk_begin.push_back(std::min(k + kChunk, samples.begin[f + 1]));
+  }
+  first_chunk[F] = chunk_begin.size() - 1;
+  const Eigen::Index K = sh_count(options.order);
+  RowMatrixXd partial(static_cast<Eigen::Index>(3 * (chunk_begin.size() - 1)), K);
+  shadowed_transfer_groups(
+      scene, samples.points, samples.normals, chunk_begin, options,
+      [&](size_t c, const double* values, size_t) {
+        sample_moments(samples, chunk_begin[c], chunk_begin[c + 1], values, K, partial.row(static_cast<Eigen::Index>(3 * c)).data());
+      },
+      stats, progress, &samples.offsets);
+  FaceMoments m{RowMatrixXd::Zero(static_cast<Eigen::Index>(3 * F), K)};
+  for (size_t f = 0; f < F; ++f)
+    for (size_t c = first_chunk[f]; c < first_chunk[f + 1]; ++c)
+      m.rows.middleRows(static_cast<Eigen::Index>(3 * f), 3) += partial.middleRows(static_cast<Eigen::Index>(3 * c), 3);
+  return m;
+}
+
 FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeSettings& s, const BakeProgress& progress) {
   auto t = std::chrono::steady_clock::now();
   FitData d;
@@ -37,7 +68,7 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeSetting
   to.stream_offset = 0;
   if (progress.stage) progress.stage("samples", d.samples.size());
   TransferStats stats;
-  d.values = shadowed_transfer(scene, d.samples.points, d.samples.normals, to, &stats, progress.add, &d.samples.offsets);
+  d.moments = trace_face_moments(mesh, scene, d.samples, to, &stats, progress.add);
   d.rays = stats.rays;
   d.seconds = since(t);
   return d;
@@ -84,7 +115,7 @@ BakeResult run_bake(const BakeSettings& s_in, const BakeProgress& progress) {
     r.rays += r.fit_data.rays;
     r.seconds_samples = since(t);
     r.point = r.transfer;
-    r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.values, r.point, s.fit, &r.fit);
+    r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, s.fit, &r.fit);
     r.seconds_fit = since(t);
     if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
   }

@@ -36,7 +36,7 @@ struct BakeSettings {
 //! Where the fit's samples and their transfer come from, kept so that several fits can share them.
 struct FitData {
   SurfaceSamples samples;
-  RowMatrixXd values;  //!< #S by K
+  FaceMoments moments;  //!< the samples' transfer, reduced face by face as it is traced
   uint64_t rays = 0;
   double seconds = 0;
 };
@@ -65,6 +65,11 @@ struct BakeResult {
 //! Runs the pipeline. `progress` (either part may be empty) follows the transfer stages.
 //! \throw InputError, IoError, EmbreeError, SolverError
 BakeResult run_bake(const BakeSettings& settings, const BakeProgress& progress = {});
+
+//! The samples' transfer, reduced to the fit's face moments as it is traced; the same for any
+//! thread count.
+FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& samples,
+                               const TransferOptions& options, TransferStats* stats = nullptr, const ProgressFn& progress = {});
 
 //! The fit's samples on `mesh` and their transfer (stage "samples").
 FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeSettings& settings, const BakeProgress& progress = {});

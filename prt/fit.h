@@ -14,13 +14,18 @@ using SparseMatrixd = Eigen::SparseMatrix<double>;
 enum class FitMethod { Point, Average, LeastSquares };
 enum class Regularizer { Edge, Gradient };
 enum class MassMatrix { Analytic, Sampled };
+//! Auto: conjugate gradients with the analytic mass matrix, falling back to CHOLMOD if they do
+//! not converge; CHOLMOD's Cholesky factorisation for the sampled one. Cholmod: always CHOLMOD.
+enum class FitSolver { Auto, Cholmod };
 
 FitMethod parse_fit_method(const std::string& name);        //!< point, average, lsq
 Regularizer parse_regularizer(const std::string& name);     //!< edge, gradient
 MassMatrix parse_mass_matrix(const std::string& name);      //!< analytic, sampled
+FitSolver parse_fit_solver(const std::string& name);        //!< auto, cholmod
 const char* fit_method_name(FitMethod m);
 const char* regularizer_name(Regularizer r);
 const char* mass_matrix_name(MassMatrix m);
+const char* fit_solver_name(FitSolver s);
 
 struct FitOptions {
   FitMethod method = FitMethod::LeastSquares;
@@ -30,15 +35,20 @@ struct FitOptions {
   //! Analytic mass: estimate b as A·prior + Monte Carlo of ∫h_i (f − g_prior), so that b's
   //! sampling error scales with f − g_prior instead of f (off: the paper's plain estimate).
   bool control_variate = true;
-  int threads = 0;     //!< for the solves of many right-hand sides; 0: every core
+  FitSolver solver = FitSolver::Auto;
+  double cg_tolerance = 1e-10;  //!< relative residual of the Jacobi-scaled system, per column
+  int cg_max_iterations = 300;  //!< beyond this, CHOLMOD takes over
+  int threads = 0;     //!< for the iterative solve; 0: every core (the result does not depend on it)
 };
 
 struct FitStats {
   size_t unknowns = 0;             //!< render vertices
   size_t unsupported = 0;          //!< vertices no sampled face touches: they keep the prior
   size_t system_nonzeros = 0;      //!< of A + αR (both triangles)
-  size_t factor_nonzeros = 0;      //!< of the Cholesky factor L
-  double solve_memory_mib = 0;     //!< system plus factor plus right-hand sides, as stored
+  size_t factor_nonzeros = 0;      //!< of the Cholesky factor L (0 when CG solved it)
+  std::string solver;              //!< "cg" or "cholmod": what produced the values
+  int cg_iterations = 0;           //!< of the slowest column, also when CG gave up
+  double solve_memory_mib = 0;     //!< system plus factor (or CG's vectors) plus right-hand sides, as stored
   double stabilizer = 0;           //!< λ of the pull towards the prior that was needed (0: none)
   double seconds_assemble = 0, seconds_factor = 0, seconds_solve = 0;
   std::string warning;             //!< non-empty when the fallback was used
@@ -58,19 +68,40 @@ SparseMatrixd gradient_regularizer(const Mesh& mesh);
 //! \param interior_edges if given, receives the number of edges that contributed
 SparseMatrixd edge_regularizer(const Mesh& mesh, size_t* interior_edges = nullptr);
 
+//! The signal at the samples reduced face by face: all the fit needs of it, 3/(samples per face)
+//! of its size. Row 3f + c is Σ w_k h_c(p_k) f(p_k) over face f's samples k.
+struct FaceMoments {
+  RowMatrixXd rows;  //!< 3#F by K
+};
+
+//! The three moment rows of samples first .. last-1, all on one face, from their values (one
+//! row of K per sample, row-major) into out (3 rows of K, row-major, overwritten). A face's
+//! moments are the sum over any partition of its samples.
+void sample_moments(const SurfaceSamples& samples, size_t first, size_t last, const double* values, Eigen::Index K,
+                    double* out);
+
+//! Every face's moments from stored sample values.
+//! \param values #S by K, the signal at the samples
+FaceMoments face_moments(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values);
+
 //! b = ∫ h_i f by Monte Carlo over the samples: #V by K.
 //! \param values #S by K, the signal at the samples
 RowMatrixXd fit_right_hand_side(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values);
 
-//! Vertex values from sample values.
+//! Vertex values from the signal's face moments at the samples.
 //!  - Average: D⁻¹b, D the lumped mass (∫ h_i): the barycentric-weighted average of the samples.
-//!  - LeastSquares: (A + αR) x = b, one sparse Cholesky factorisation for all K columns.
+//!  - LeastSquares: (A + αR) x = b for all K columns, by block conjugate gradients started at
+//!    the prior, or by one sparse Cholesky factorisation (FitOptions::solver).
 //! A vertex no sampled face touches keeps its prior value. When the system is singular to
 //! working precision (α = 0 with a mass matrix that cannot see a vertex), it is stabilised by a
 //! pull towards the prior, λ·D(x − prior), with the smallest λ that factorises; FitStats says so.
 //! \param prior #V by K: the point-sampled values (what Point returns)
 //! \return #V by K, all finite
 //! \throw SolverError if no stabilised system factorises, InputError for bad shapes or α
+RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, const FaceMoments& moments,
+                              const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
+
+//! The same from stored sample values (#S by K).
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values,
                               const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
 

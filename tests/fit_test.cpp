@@ -321,6 +321,50 @@ TEST(Fit, ManyRightHandSidesMatchADenseSolveColumnByColumn) {
   EXPECT_LT((Eigen::MatrixXd(x) - dense).cwiseAbs().maxCoeff(), 1e-10 * dense.cwiseAbs().maxCoeff());
 }
 
+TEST(Fit, ConjugateGradientsAgreeWithCholmodAndFallBackWhenTheyStall) {
+  // Order 4 on a jittered sphere, both regularisers and α = 0: the iterative solve (the default
+  // with the analytic mass) and the factorisation solve the same system.
+  Mesh m = test::build(test::icosphere(2));
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  RowMatrixXd values(Eigen::Index(s.size()), 16), prior(Eigen::Index(m.num_vertices()), 16);
+  for (Eigen::Index i = 0; i < values.rows(); ++i)
+    for (int k = 0; k < 16; ++k) values(i, k) = std::cos(k * s.points(i, 1)) + (s.points(i, 0) > 0.3 ? 1 : 0);
+  for (Eigen::Index i = 0; i < prior.rows(); ++i)
+    for (int k = 0; k < 16; ++k) prior(i, k) = std::cos(k * m.point(uint32_t(i)).y());
+  for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient})
+    for (double alpha : {0.0, 0.1, 10.0}) {
+      FitOptions o;
+      o.regularizer = reg, o.alpha = alpha;
+      FitStats cg_stats, direct_stats;
+      const RowMatrixXd cg = fit_vertex_values(m, s, values, prior, o, &cg_stats);
+      o.solver = FitSolver::Cholmod;
+      const RowMatrixXd direct = fit_vertex_values(m, s, values, prior, o, &direct_stats);
+      EXPECT_EQ(cg_stats.solver, "cg");
+      EXPECT_EQ(direct_stats.solver, "cholmod");
+      EXPECT_GT(cg_stats.cg_iterations, 0);
+      EXPECT_LT(cg_stats.cg_iterations, 150) << "alpha " << alpha;
+      EXPECT_GT(direct_stats.factor_nonzeros, 0u);
+      EXPECT_TRUE(cg_stats.warning.empty());
+      EXPECT_LT((cg - direct).cwiseAbs().maxCoeff(), 1e-8 * direct.cwiseAbs().maxCoeff())
+          << regularizer_name(reg) << " alpha " << alpha;
+    }
+  // Too few iterations allowed: CHOLMOD takes over, says so, and gives its own answer.
+  FitOptions o;
+  o.cg_max_iterations = 2;
+  FitStats st;
+  const RowMatrixXd x = fit_vertex_values(m, s, values, prior, o, &st);
+  EXPECT_EQ(st.solver, "cholmod");
+  EXPECT_EQ(st.cg_iterations, 2);
+  EXPECT_NE(st.warning.find("conjugate gradients stopped"), std::string::npos) << st.warning;
+  o.solver = FitSolver::Cholmod;
+  EXPECT_EQ(x, fit_vertex_values(m, s, values, prior, o));
+  // The sampled mass matrix can be singular: it always goes to CHOLMOD and its condition check.
+  o.solver = FitSolver::Auto, o.mass = MassMatrix::Sampled;
+  fit_vertex_values(m, s, values, prior, o, &st);
+  EXPECT_EQ(st.solver, "cholmod");
+  EXPECT_EQ(st.cg_iterations, 0);
+}
+
 TEST(FitStability, SliversBelowOneHundredthOfADegree) {
   // Pull one interior grid vertex to within 1e-6 of a grid line: faces with angles ~1e-4°.
   RawMesh r = grid(6, 0);

@@ -4,7 +4,9 @@
 
 #include <cmath>
 
+#include "cli/pipeline.h"
 #include "helpers.h"
+#include "prt/fit.h"
 #include "prt/sh.h"
 #include "subdiv/exceptions.h"
 
@@ -151,6 +153,39 @@ TEST(Transfer, DeterministicForAnyThreadCountAndSeedSensitive) {
   o.seed = 1;
   RowMatrixXd other = bake(m, o);
   EXPECT_GT((one - other).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Transfer, GroupsAreTheSameTraceAndTheirMomentsDoNotDependOnThreads) {
+  // A sphere above a floor of two big triangles: the floor's faces hold many samples each, so
+  // they are split over several chunks.
+  Mesh m = test::build(test::merge(test::icosphere(1), test::quad(3.0, -1.0, true)));
+  RayScene scene(m.positions, position_triangles(m));
+  SampleOptions so;
+  so.per_triangle = 40;
+  const SurfaceSamples s = make_surface_samples(m, so);
+  TransferOptions o;
+  o.rays = 16;
+  const RowMatrixXd whole = shadowed_transfer(scene, s.points, s.normals, o, nullptr, {}, &s.offsets);
+  // Uneven groups, consumed in any order: each row as the whole trace has it, every row once.
+  std::vector<size_t> begin{0, 1, 7, 100, s.size()};
+  RowMatrixXd grouped = RowMatrixXd::Constant(whole.rows(), whole.cols(), NAN);
+  shadowed_transfer_groups(scene, s.points, s.normals, begin, o, [&](size_t g, const double* v, size_t rows) {
+    ASSERT_EQ(rows, begin[g + 1] - begin[g]);
+    std::copy_n(v, rows * size_t(whole.cols()), grouped.row(Eigen::Index(begin[g])).data());
+  }, nullptr, {}, &s.offsets);
+  EXPECT_EQ(grouped, whole);
+  EXPECT_THROW(shadowed_transfer_groups(scene, s.points, s.normals, {0, 5, 3, s.size()}, o, [](size_t, const double*, size_t) {}),
+               InputError);
+  // The face moments: identical for one and two threads, and the stored values' moments up to
+  // the order of summation.
+  ASSERT_GT(s.begin[m.num_faces()] - s.begin[m.num_faces() - 1], 200u);  // a floor face: 4+ chunks
+  o.threads = 1;
+  const FaceMoments one = trace_face_moments(m, scene, s, o);
+  o.threads = 2;
+  const FaceMoments two = trace_face_moments(m, scene, s, o);
+  EXPECT_EQ(one.rows, two.rows);
+  const FaceMoments stored = face_moments(m, s, whole);
+  EXPECT_LT((one.rows - stored.rows).cwiseAbs().maxCoeff(), 1e-12 * stored.rows.cwiseAbs().maxCoeff());
 }
 
 TEST(Transfer, RejectsBadOptions) {

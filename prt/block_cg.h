@@ -1,0 +1,34 @@
+// Conjugate gradients for a symmetric positive definite sparse system with many right-hand
+// sides at once: each column runs its own CG, sharing the passes over the matrix.
+#pragma once
+
+#include <Eigen/SparseCore>
+
+#include "subdiv/mesh.h"
+
+namespace prtsub {
+
+using RowSparseMatrixd = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+struct BlockCgOptions {
+  double tolerance = 1e-10;  //!< stop a column when ‖b − Ax‖ ≤ tolerance·‖b‖
+  int max_iterations = 300;
+  int threads = 0;           //!< 0: every core; the result does not depend on it
+};
+
+struct BlockCgResult {
+  int iterations = 0;             //!< of the slowest column
+  bool converged = false;         //!< every column reached the tolerance
+  double relative_residual = 0;   //!< the worst column's ‖b − Ax‖ / ‖b‖ at the end
+};
+
+//! Solves A X = B column by column, unpreconditioned (scale A to a unit diagonal first: that is
+//! Jacobi preconditioning). X holds the starting guess and receives the solution. Stops early
+//! and reports converged = false if a column breaks down (pᵀAp ≤ 0: A is not positive definite)
+//! or does not converge within max_iterations; X then holds the last finite iterate.
+//! \param A n by n, both triangles stored
+//! \param B n by K, by value: its storage becomes the residual's (move it in if you are done with it)
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X,
+                                       const BlockCgOptions& options = {});
+
+}  // namespace prtsub

@@ -1,0 +1,103 @@
+#include "prt/block_cg.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "prt/sampling.h"
+
+namespace prtsub {
+namespace {
+
+// A random symmetric positive definite matrix shaped like a mesh's: a 1-D chain with a few long
+// links, unit diagonal after scaling, diagonally dominant by a margin so its condition is modest.
+RowSparseMatrixd chain(Eigen::Index n, uint64_t seed) {
+  std::vector<Eigen::Triplet<double>> t;
+  Rng rng(seed, 0);
+  std::vector<double> row_sum(size_t(n), 0.0);
+  auto link = [&](Eigen::Index i, Eigen::Index j) {
+    const double v = -rng.uniform();
+    t.emplace_back(i, j, v), t.emplace_back(j, i, v);
+    row_sum[size_t(i)] += -v, row_sum[size_t(j)] += -v;
+  };
+  for (Eigen::Index i = 0; i + 1 < n; ++i) link(i, i + 1);
+  for (Eigen::Index i = 0; i + 97 < n; i += 13) link(i, i + 97);
+  for (Eigen::Index i = 0; i < n; ++i) t.emplace_back(i, i, 0.05 + row_sum[size_t(i)]);
+  RowSparseMatrixd A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  return A;
+}
+
+RowMatrixXd random_columns(Eigen::Index n, Eigen::Index K, uint64_t seed) {
+  RowMatrixXd B(n, K);
+  Rng rng(seed, 1);
+  for (Eigen::Index i = 0; i < B.size(); ++i) B.data()[i] = rng.uniform() - 0.5;
+  return B;
+}
+
+TEST(BlockCg, EveryColumnMatchesADenseSolveToItsTolerance) {
+  const Eigen::Index n = 1500, K = 5;  // a block of rows and a partial one
+  const RowSparseMatrixd A = chain(n, 7);
+  RowMatrixXd B = random_columns(n, K, 8);
+  B.col(3).setZero();  // a zero right-hand side has the zero solution, whatever the start
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(A).ldlt().solve(Eigen::MatrixXd(B));
+  RowMatrixXd X = random_columns(n, K, 9);  // a warm start far from the solution
+  BlockCgOptions o;
+  o.tolerance = 1e-10, o.max_iterations = 5000;
+  const BlockCgResult r = block_conjugate_gradient(A, B, X, o);
+  ASSERT_TRUE(r.converged);
+  EXPECT_GT(r.iterations, 10);
+  EXPECT_LE(r.relative_residual, 1e-10);
+  // The true residual, computed independently of CG's recurrence.
+  for (Eigen::Index q = 0; q < K; ++q) {
+    const Eigen::VectorXd res = Eigen::VectorXd(B.col(q)) - A * Eigen::VectorXd(X.col(q));
+    if (q == 3) EXPECT_EQ(X.col(q).cwiseAbs().maxCoeff(), 0.0);
+    else EXPECT_LT(res.norm(), 1e-9 * B.col(q).norm()) << "column " << q;
+  }
+  EXPECT_LT((Eigen::MatrixXd(X) - dense).cwiseAbs().maxCoeff(), 1e-7 * dense.cwiseAbs().maxCoeff());
+}
+
+TEST(BlockCg, TheResultDoesNotDependOnTheThreadCount) {
+  const Eigen::Index n = 5000, K = 3;
+  const RowSparseMatrixd A = chain(n, 11);
+  const RowMatrixXd B = random_columns(n, K, 12);
+  RowMatrixXd one = RowMatrixXd::Zero(n, K), two = one;
+  block_conjugate_gradient(A, B, one, {1e-12, 5000, 1});
+  block_conjugate_gradient(A, B, two, {1e-12, 5000, 2});
+  EXPECT_EQ(one, two);  // bit for bit
+}
+
+TEST(BlockCg, StartingAtTheSolutionTakesNoIterations) {
+  const RowSparseMatrixd A = chain(100, 3);
+  const RowMatrixXd X0 = random_columns(100, 2, 4);
+  RowMatrixXd X = X0;
+  const BlockCgResult r = block_conjugate_gradient(A, A * X0, X, {1e-8, 100, 0});
+  EXPECT_TRUE(r.converged);
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_EQ(X, X0);
+}
+
+TEST(BlockCg, IndefiniteOrStalledSystemsSayTheyDidNotConverge) {
+  // diag(1, …, 1, −1): pᵀAp ≤ 0 can occur; the result must say so and stay finite.
+  const Eigen::Index n = 50;
+  RowSparseMatrixd A(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) A.insert(i, i) = i + 1 == n ? -1.0 : 1.0 + 0.1 * double(i);
+  RowMatrixXd B = RowMatrixXd::Zero(n, 1);
+  B(n - 1, 0) = 1;  // only the negative direction: the first step finds pᵀAp < 0
+  RowMatrixXd X = RowMatrixXd::Zero(n, 1);
+  BlockCgResult r = block_conjugate_gradient(A, B, X, {1e-10, 100, 0});
+  EXPECT_FALSE(r.converged);
+  EXPECT_TRUE(X.allFinite());
+  // An iteration cap below what the system needs.
+  const RowSparseMatrixd C = chain(2000, 5);
+  RowMatrixXd Y = RowMatrixXd::Zero(2000, 2);
+  r = block_conjugate_gradient(C, random_columns(2000, 2, 6), Y, {1e-10, 3, 0});
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.iterations, 3);
+  EXPECT_GT(r.relative_residual, 1e-10);
+  EXPECT_TRUE(Y.allFinite());
+}
+
+}  // namespace
+}  // namespace prtsub
