@@ -112,6 +112,7 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B,
     any |= active[c] != 0;
   }
   bool broke = false;
+  std::vector<double> history{worst()};  // the worst column's relative residual, per iteration
   while (any && result.iterations < o.max_iterations) {
     std::vector<double> pap = blocks.run(
         [&](Eigen::Index f, Eigen::Index l, double* dot) { multiply_rows(A, P.data(), Y.data(), K, f, l, dot); });
@@ -144,6 +145,18 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B,
     }
     ++result.iterations;
     if (!any) break;
+    // Give up early when the recent rate of decrease says the cap will not be enough: a stiff
+    // system is better handed to a direct solver now than after max_iterations passes.
+    history.push_back(worst());
+    const int it = result.iterations, window = 10;
+    if (o.predict_stall && it >= 2 * window) {
+      const double rate = std::pow(history[size_t(it)] / history[size_t(it - window)], 1.0 / window);
+      const double needed = rate < 1 ? std::log(o.tolerance / history[size_t(it)]) / std::log(rate) : INFINITY;
+      if (it + needed > o.max_iterations) {
+        result.predicted_stall = true;
+        break;
+      }
+    }
     blocks.run([&](Eigen::Index f, Eigen::Index l, double*) {
       for (Eigen::Index i = f; i < l; ++i) {
         double* p = P.data() + i * K;

@@ -14,18 +14,23 @@ struct BlockCgOptions {
   double tolerance = 1e-10;  //!< stop a column when ‖b − Ax‖ ≤ tolerance·‖b‖
   int max_iterations = 300;
   int threads = 0;           //!< 0: every core; the result does not depend on it
+  //! From iteration 20, stop as soon as the last 10 iterations' rate of decrease predicts that
+  //! max_iterations will not reach the tolerance.
+  bool predict_stall = true;
 };
 
 struct BlockCgResult {
   int iterations = 0;             //!< of the slowest column
   bool converged = false;         //!< every column reached the tolerance
   double relative_residual = 0;   //!< the worst column's ‖b − Ax‖ / ‖b‖ at the end
+  bool predicted_stall = false;   //!< stopped early: the cap would not have been enough
 };
 
 //! Solves A X = B column by column, unpreconditioned (scale A to a unit diagonal first: that is
 //! Jacobi preconditioning). X holds the starting guess and receives the solution. Stops early
-//! and reports converged = false if a column breaks down (pᵀAp ≤ 0: A is not positive definite)
-//! or does not converge within max_iterations; X then holds the last finite iterate.
+//! and reports converged = false if a column breaks down (pᵀAp ≤ 0: A is not positive definite),
+//! does not converge within max_iterations, or is predicted not to; X then holds the last
+//! finite iterate.
 //! \param A n by n, both triangles stored
 //! \param B n by K, by value: its storage becomes the residual's (move it in if you are done with it)
 BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X,

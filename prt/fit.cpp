@@ -505,11 +505,8 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
       if (stats_out) *stats_out = stats;
       return x;
     }
-    char buf[200];
-    std::snprintf(buf, sizeof buf,
-                  "fit: conjugate gradients stopped at relative residual %.1e after %d iterations; solved with CHOLMOD",
-                  cg.relative_residual, cg.iterations);
-    stats.warning = buf;  // the clock runs on: CG's attempt counts as factorisation time
+    // Not a warning: a stiff system (slivers beside large faces) is CHOLMOD's job, and the
+    // stats say which solver ran. The clock runs on: CG's attempt counts as factorisation time.
   }
   if (n > 0) {
     stats.solver = "cholmod";

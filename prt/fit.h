@@ -37,7 +37,7 @@ struct FitOptions {
   bool control_variate = true;
   FitSolver solver = FitSolver::Auto;
   double cg_tolerance = 1e-10;  //!< relative residual of the Jacobi-scaled system, per column
-  int cg_max_iterations = 300;  //!< beyond this, CHOLMOD takes over
+  int cg_max_iterations = 100;  //!< beyond this (or when CG predicts it), CHOLMOD takes over
   int threads = 0;     //!< for the iterative solve; 0: every core (the result does not depend on it)
 };
 

@@ -332,30 +332,33 @@ TEST(Fit, ConjugateGradientsAgreeWithCholmodAndFallBackWhenTheyStall) {
   for (Eigen::Index i = 0; i < prior.rows(); ++i)
     for (int k = 0; k < 16; ++k) prior(i, k) = std::cos(k * m.point(uint32_t(i)).y());
   for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient})
-    for (double alpha : {0.0, 0.1, 10.0}) {
+    for (double alpha : {0.0, 0.1, 1.0, 10.0}) {
       FitOptions o;
       o.regularizer = reg, o.alpha = alpha;
       FitStats cg_stats, direct_stats;
       const RowMatrixXd cg = fit_vertex_values(m, s, values, prior, o, &cg_stats);
       o.solver = FitSolver::Cholmod;
       const RowMatrixXd direct = fit_vertex_values(m, s, values, prior, o, &direct_stats);
-      EXPECT_EQ(cg_stats.solver, "cg");
+      // α = 10 makes R_edge dominate: CG may predict a stall and hand over; either way the answer agrees.
+      if (alpha <= 1) {
+        EXPECT_EQ(cg_stats.solver, "cg") << regularizer_name(reg) << " alpha " << alpha << " iterations " << cg_stats.cg_iterations;
+        EXPECT_GT(cg_stats.cg_iterations, 0);
+        EXPECT_LT(cg_stats.cg_iterations, 100);
+      }
       EXPECT_EQ(direct_stats.solver, "cholmod");
-      EXPECT_GT(cg_stats.cg_iterations, 0);
-      EXPECT_LT(cg_stats.cg_iterations, 150) << "alpha " << alpha;
       EXPECT_GT(direct_stats.factor_nonzeros, 0u);
       EXPECT_TRUE(cg_stats.warning.empty());
       EXPECT_LT((cg - direct).cwiseAbs().maxCoeff(), 1e-8 * direct.cwiseAbs().maxCoeff())
           << regularizer_name(reg) << " alpha " << alpha;
     }
-  // Too few iterations allowed: CHOLMOD takes over, says so, and gives its own answer.
+  // Too few iterations allowed: CHOLMOD takes over, the stats say so, and it gives its own answer.
   FitOptions o;
   o.cg_max_iterations = 2;
   FitStats st;
   const RowMatrixXd x = fit_vertex_values(m, s, values, prior, o, &st);
   EXPECT_EQ(st.solver, "cholmod");
   EXPECT_EQ(st.cg_iterations, 2);
-  EXPECT_NE(st.warning.find("conjugate gradients stopped"), std::string::npos) << st.warning;
+  EXPECT_TRUE(st.warning.empty()) << st.warning;  // normal operation for a stiff system
   o.solver = FitSolver::Cholmod;
   EXPECT_EQ(x, fit_vertex_values(m, s, values, prior, o));
   // The sampled mass matrix can be singular: it always goes to CHOLMOD and its condition check.
