@@ -58,6 +58,7 @@ void add_defects(Report& r, const MeshDefects& d) {
   r.set("defects_winding_conflicts", static_cast<uint64_t>(d.winding_conflicts));
   r.set("defects_non_manifold_edges", static_cast<uint64_t>(d.non_manifold_edges));
   r.set("defects_invalid_file_normals", static_cast<uint64_t>(d.invalid_file_normals));
+  r.set("defects_corners_without_uv", static_cast<uint64_t>(d.corners_without_uv));
   r.set("welded_vertices", static_cast<uint64_t>(d.welded_vertices));
   r.set("boundary_edges", static_cast<uint64_t>(d.boundary_edges));
   r.set("polygons_triangulated", static_cast<uint64_t>(d.polygons_triangulated));
@@ -66,9 +67,9 @@ void add_defects(Report& r, const MeshDefects& d) {
 void print_defects(const MeshDefects& d) {
   std::printf("  tolerated:  %zu degenerate faces dropped, %zu zero-area faces, %zu duplicate faces,\n"
               "              %zu unreferenced vertices dropped, %zu winding conflicts, %zu non-manifold edges,\n"
-              "              %zu invalid file normals\n",
+              "              %zu invalid file normals, %zu corners without UVs (0, 0)\n",
               d.degenerate_faces, d.zero_area_faces, d.duplicate_faces, d.unreferenced_vertices,
-              d.winding_conflicts, d.non_manifold_edges, d.invalid_file_normals);
+              d.winding_conflicts, d.non_manifold_edges, d.invalid_file_normals, d.corners_without_uv);
   std::printf("  topology:   %zu boundary edges, %zu vertices welded, %zu polygons triangulated\n",
               d.boundary_edges, d.welded_vertices, d.polygons_triangulated);
 }
@@ -193,9 +194,9 @@ int cmd_bake(int argc, char** argv) {
 
   std::printf("prtsub bake: %s -> %s\n", c.input.c_str(), output.c_str());
   std::printf("  input:      %zu triangles, %zu vertices\n", mesh.input_triangles, mesh.input_vertices);
-  std::printf("  output:     %zu triangles, %zu vertices (%lld positions; normals %s)\n", mesh.num_faces(),
+  std::printf("  output:     %zu triangles, %zu vertices (%lld positions; normals %s%s)\n", mesh.num_faces(),
               mesh.num_vertices(), static_cast<long long>(mesh.positions.rows()),
-              mesh.normals_from_file ? "from file" : "computed");
+              mesh.normals_from_file ? "from file" : "computed", mesh.has_uv() ? "; UVs from file" : "");
   print_defects(mesh.defects);
   if (b.refine == "adaptive") {
     const RefineStats& st = res.refine;

@@ -77,6 +77,10 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   if (static_cast<size_t>(transfer.rows()) != V)
     throw InputError(path + ": transfer has " + std::to_string(transfer.rows()) + " rows for " + std::to_string(V) + " vertices");
   if (!transfer.allFinite()) throw InputError(path + ": refusing to write non-finite transfer values");
+  const bool uv = mesh.has_uv();
+  if (uv && static_cast<size_t>(mesh.uv.rows()) != V)
+    throw InputError(path + ": the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " + std::to_string(V) + " vertices");
+  if (uv && !mesh.uv.allFinite()) throw InputError(path + ": refusing to write non-finite UVs");
   for (size_t v = 0; v < V; ++v) {
     for (int c = 0; c < 3; ++c) {
       double p = mesh.positions(mesh.vertex_position[v], c);
@@ -89,7 +93,7 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   }
 
   std::string out;
-  out.reserve(512 + V * (6 + static_cast<size_t>(K)) * 4 + F * 17);
+  out.reserve(512 + V * (8 + static_cast<size_t>(K)) * 4 + F * 17);
   out += "ply\nformat binary_little_endian 1.0\n";
   for (const auto& [key, value] : metadata) {
     std::string line = key + " " + value;
@@ -99,6 +103,7 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   }
   out += "element vertex " + std::to_string(V) + "\n";
   for (const char* p : {"x", "y", "z", "nx", "ny", "nz"}) out += std::string("property float ") + p + "\n";
+  if (uv) out += "property float u\nproperty float v\n";
   if (signal == AssetSignal::Ao) out += "property float ao\n";
   else
     for (Eigen::Index c = 0; c < K; ++c) out += "property float t" + std::to_string(c) + "\n";
@@ -108,6 +113,8 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
     const auto vi = static_cast<Eigen::Index>(v);
     for (int c = 0; c < 3; ++c) put(out, static_cast<float>(mesh.positions(mesh.vertex_position[v], c)));
     for (int c = 0; c < 3; ++c) put(out, static_cast<float>(mesh.normals(vi, c)));
+    if (uv)
+      for (int c = 0; c < 2; ++c) put(out, static_cast<float>(mesh.uv(vi, c)));
     for (Eigen::Index c = 0; c < K; ++c) put(out, static_cast<float>(transfer(vi, c)));
   }
   for (size_t f = 0; f < F; ++f) {
@@ -140,6 +147,14 @@ Asset read_asset(const std::string& path) {
   for (int c = 0; c < 6; ++c) {
     const auto& col = column(names[c]);
     for (Eigen::Index i = 0; i < V; ++i) (c < 3 ? a.positions(i, c) : a.normals(i, c - 3)) = col[static_cast<size_t>(i)];
+  }
+  if (v->scalar("u") && v->scalar("v")) {
+    a.uv.resize(V, 2);
+    for (int c = 0; c < 2; ++c) {
+      const auto& col = column(c == 0 ? "u" : "v");
+      for (Eigen::Index i = 0; i < V; ++i) a.uv(i, c) = col[static_cast<size_t>(i)];
+    }
+    if (!a.uv.allFinite()) throw InputError(path + ": a UV holds NaN or Inf");
   }
   int K = 0;
   while (v->scalar("t" + std::to_string(K))) ++K;

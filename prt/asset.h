@@ -23,6 +23,7 @@ constexpr double kAoPerT0 = 1.1283791670955126;
 struct Asset {
   RowMatrixX3d positions;             //!< #V by 3
   RowMatrixX3d normals;               //!< #V by 3
+  RowMatrixX2d uv;                    //!< #V by 2, or no rows when the asset has none
   RowMatrixXd transfer;               //!< #V by N²
   std::vector<Triangle> triangles;    //!< #F
   std::vector<uint32_t> source_face;  //!< #F

@@ -1,8 +1,8 @@
 // The triangle mesh every stage of prtsub passes along.
 //
 // Topology and values live apart: `positions` are welded (one row per distinct point in
-// space), while render vertices carry what a GPU vertex carries (a normal, later values
-// such as transfer). A position on a crease has one render vertex per side. Triangles
+// space), while render vertices carry what a GPU vertex carries (a normal, UVs, later values
+// such as transfer). A position on a crease or a UV seam has one render vertex per side. Triangles
 // index render vertices; `vertex_position` maps each back to its position, so topology
 // (edges, adjacency, conforming splits) is always taken over positions.
 #pragma once
@@ -18,6 +18,7 @@ namespace prtsub {
 
 using RowMatrixX3d = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using RowMatrixX2d = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
 using Triangle = std::array<uint32_t, 3>;
 
 //! Defects found while loading; tolerated, counted, and reported in every summary.
@@ -32,6 +33,7 @@ struct MeshDefects {
   size_t boundary_edges = 0;         //!< edges with one face (information, not a defect)
   size_t polygons_triangulated = 0;  //!< input faces with more than three corners
   size_t invalid_file_normals = 0;   //!< zero or non-finite normals in the file (recomputed)
+  size_t corners_without_uv = 0;     //!< corners of a mesh with UVs that the file gave none (0, 0)
 };
 
 //! A triangle mesh with welded positions and per-crease-side render vertices.
@@ -39,12 +41,17 @@ struct Mesh {
   RowMatrixX3d positions;                //!< #P by 3, welded
   std::vector<uint32_t> vertex_position;  //!< #V, render vertex -> row of positions
   RowMatrixX3d normals;                  //!< #V by 3, unit length
+  //! #V by 2 texture coordinates (u, v) as the file gives them, or no rows when it has none.
+  //! A position on a UV seam has one render vertex per side, as on a crease.
+  RowMatrixX2d uv;
   std::vector<Triangle> triangles;       //!< #F, render-vertex indices, counter-clockwise
   std::vector<uint32_t> source_face;     //!< #F, index of the input triangle it lies in
   size_t input_triangles = 0;            //!< triangles in the input after triangulation
   size_t input_vertices = 0;             //!< vertices as the file lists them
   bool normals_from_file = false;
   MeshDefects defects;
+
+  bool has_uv() const { return uv.rows() > 0; }
 
   size_t num_vertices() const { return vertex_position.size(); }
   size_t num_faces() const { return triangles.size(); }

@@ -117,12 +117,21 @@ struct PositionHash {
 }  // namespace
 
 RawMesh parse_obj(const std::string& bytes, const std::string& path) {
-  std::vector<double> pos, nrm;
+  std::vector<double> pos, nrm, tex;
   RawMesh raw;
   raw.face_offsets.push_back(0);
-  bool any_corner_normal = false;
+  bool any_corner_normal = false, any_corner_texcoord = false;
   LineCursor lines{bytes};
   std::string_view line, tok;
+  // An OBJ index: 1-based, or negative counting back from the latest of `count` elements.
+  auto index = [&](std::string_view t, int64_t count, const char* what) {
+    const int64_t i = parse_int(t, path, lines.line_no);
+    const int64_t r = i > 0 ? i - 1 : count + i;
+    if (i == 0 || r < 0 || r >= count)
+      bad_line(path, lines.line_no, std::string(what) + " index " + std::to_string(i) + " out of range (" +
+                                        std::to_string(count) + " " + what + "s so far)");
+    return r;
+  };
   while (lines.next(line)) {
     std::string_view rest = line;
     if (!next_token(rest, tok) || tok[0] == '#') continue;
@@ -130,35 +139,47 @@ RawMesh parse_obj(const std::string& bytes, const std::string& path) {
       read_xyz(rest, pos, path, lines.line_no);
     } else if (tok == "vn") {
       read_xyz(rest, nrm, path, lines.line_no);
+    } else if (tok == "vt") {
+      for (int k = 0; k < 2; ++k) {  // u, and v (0 if absent); a third (w) is not ours
+        if (!next_token(rest, tok)) {
+          if (k == 0) bad_line(path, lines.line_no, "expected a texture coordinate");
+          tex.push_back(0.0);
+          break;
+        }
+        tex.push_back(parse_double(tok, path, lines.line_no));
+      }
     } else if (tok == "f") {
-      const int64_t nv = static_cast<int64_t>(pos.size() / 3), nn = static_cast<int64_t>(nrm.size() / 3);
+      const int64_t nv = static_cast<int64_t>(pos.size() / 3), nn = static_cast<int64_t>(nrm.size() / 3),
+                    nt = static_cast<int64_t>(tex.size() / 2);
       while (next_token(rest, tok)) {
-        // v, v/t, v//n or v/t/n; negative indices count back from the latest element.
+        // v, v/t, v//n or v/t/n.
         size_t s1 = tok.find('/');
         int64_t v = parse_int(tok.substr(0, s1), path, lines.line_no);
         if (v == 0) bad_line(path, lines.line_no, "face index 0 (OBJ indices start at 1)");
         raw.face_indices.push_back(v > 0 ? v - 1 : nv + v);
-        int64_t n = -1;
+        int64_t n = -1, t = -1;
         if (s1 != std::string_view::npos) {
           size_t s2 = tok.find('/', s1 + 1);
-          if (s2 != std::string_view::npos && s2 + 1 < tok.size()) {
-            int64_t ni = parse_int(tok.substr(s2 + 1), path, lines.line_no);
-            n = ni > 0 ? ni - 1 : nn + ni;
-            if (ni == 0 || n < 0 || n >= nn)
-              bad_line(path, lines.line_no, "normal index " + std::to_string(ni) + " out of range (" +
-                                                std::to_string(nn) + " normals so far)");
-            any_corner_normal = true;
-          }
+          const std::string_view tt = tok.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
+          if (!tt.empty()) t = index(tt, nt, "texture coordinate"), any_corner_texcoord = true;
+          if (s2 != std::string_view::npos && s2 + 1 < tok.size()) n = index(tok.substr(s2 + 1), nn, "normal"), any_corner_normal = true;
         }
         raw.corner_normals.push_back(n);
+        raw.corner_texcoords.push_back(t);
       }
       raw.face_offsets.push_back(raw.face_indices.size());
     }
-    // vt, o, g, s, usemtl, mtllib, l, p: not geometry we bake.
+    // o, g, s, usemtl, mtllib, l, p: not geometry we bake.
   }
   raw.positions = to_matrix(pos);
   raw.normals = to_matrix(nrm);
   if (!any_corner_normal) raw.corner_normals.clear(), raw.normals.resize(0, 3);
+  if (any_corner_texcoord) {
+    raw.texcoords.resize(static_cast<Eigen::Index>(tex.size() / 2), 2);
+    if (!tex.empty()) std::memcpy(raw.texcoords.data(), tex.data(), tex.size() * sizeof(double));
+  } else {
+    raw.corner_texcoords.clear();
+  }
   return raw;
 }
 
@@ -288,6 +309,14 @@ RawMesh parse_ply_mesh(const std::string& bytes, const std::string& path) {
     for (size_t i = 0; i < v->count; ++i)
       raw.normals.row(static_cast<Eigen::Index>(i)) << (*nx)[i], (*ny)[i], (*nz)[i];
   }
+  for (auto [un, vn] : {std::pair{"u", "v"}, std::pair{"s", "t"}, std::pair{"texture_u", "texture_v"},
+                        std::pair{"texture_s", "texture_t"}}) {
+    const std::vector<double>*u = v->scalar(un), *w = v->scalar(vn);
+    if (!u || !w) continue;
+    raw.texcoords.resize(static_cast<Eigen::Index>(v->count), 2);
+    for (size_t i = 0; i < v->count; ++i) raw.texcoords.row(static_cast<Eigen::Index>(i)) << (*u)[i], (*w)[i];
+    break;
+  }
   raw.face_offsets.push_back(0);
   if (f) {
     int li = f->list("vertex_indices");
@@ -320,6 +349,14 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
                          std::to_string(nin) + " vertices (0-based)");
   const bool per_vertex_normals = raw.corner_normals.empty() && raw.normals.rows() == raw.positions.rows();
   const bool per_corner_normals = !raw.corner_normals.empty();
+  const bool per_corner_uv = !raw.corner_texcoords.empty();
+  const bool per_vertex_uv = !per_corner_uv && raw.texcoords.rows() > 0;
+  if (per_vertex_uv && raw.texcoords.rows() != raw.positions.rows())
+    throw InputError(path + ": " + std::to_string(raw.texcoords.rows()) + " texture coordinates for " +
+                     std::to_string(raw.positions.rows()) + " vertices");
+  for (Eigen::Index i = 0; i < raw.texcoords.rows(); ++i)
+    if (!raw.texcoords.row(i).allFinite())
+      throw InputError(path + ": texture coordinate " + std::to_string(i) + " is not finite");
 
   Mesh mesh;
   mesh.input_vertices = nin;
@@ -406,13 +443,19 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
   struct VertexKey {
     uint32_t position;
     uint64_t a, b;  // group id, or the normal's bits
-    bool operator==(const VertexKey& o) const { return position == o.position && a == o.a && b == o.b; }
+    uint64_t u = 0, v = 0;  // the UV's bits
+    bool operator==(const VertexKey& o) const {
+      return position == o.position && a == o.a && b == o.b && u == o.u && v == o.v;
+    }
   };
   struct VertexHash {
     size_t operator()(const VertexKey& k) const {
-      return static_cast<size_t>((k.position * 0x9E3779B97F4A7C15ull) ^ (k.a * 0xC2B2AE3D27D4EB4Full) ^ (k.b + 0x165667B19E3779F9ull));
+      return static_cast<size_t>((k.position * 0x9E3779B97F4A7C15ull) ^ (k.a * 0xC2B2AE3D27D4EB4Full) ^ (k.b + 0x165667B19E3779F9ull) ^
+                                 ((k.u * 0x27D4EB2F165667C5ull) + (k.v ^ (k.v >> 31))));
     }
   };
+  const bool has_uv = per_corner_uv || per_vertex_uv;
+  std::vector<double> uvs;
   std::unordered_map<VertexKey, uint32_t, VertexHash> vertex_of;
   vertex_of.reserve(tri_pos.size() * 2);
   std::vector<double> normals;
@@ -441,15 +484,29 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
           ++d.invalid_file_normals;
         }
       }
+      Eigen::Vector2d uv(0, 0);
+      if (has_uv) {
+        const int64_t row = per_corner_uv ? raw.corner_texcoords[tri_corner[f][k]] : raw.face_indices[tri_corner[f][k]];
+        if (row >= 0) uv = raw.texcoords.row(static_cast<Eigen::Index>(row)).transpose();
+        else ++d.corners_without_uv;
+        const double u0 = uv.x() == 0.0 ? 0.0 : uv.x(), v0 = uv.y() == 0.0 ? 0.0 : uv.y();  // -0 is 0
+        std::memcpy(&key.u, &u0, 8);
+        std::memcpy(&key.v, &v0, 8);
+      }
       auto [it, inserted] = vertex_of.emplace(key, static_cast<uint32_t>(mesh.vertex_position.size()));
       if (inserted) {
         mesh.vertex_position.push_back(p);
         normals.insert(normals.end(), {n.x(), n.y(), n.z()});
+        if (has_uv) uvs.insert(uvs.end(), {uv.x(), uv.y()});
       }
       mesh.triangles[f][k] = it->second;
     }
   }
   mesh.normals = to_matrix(normals);
+  if (has_uv) {
+    mesh.uv.resize(static_cast<Eigen::Index>(uvs.size() / 2), 2);
+    std::memcpy(mesh.uv.data(), uvs.data(), uvs.size() * sizeof(double));
+  }
   return mesh;
 }
 

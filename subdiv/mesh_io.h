@@ -1,5 +1,6 @@
 // Reading meshes: OBJ, PLY (ASCII and binary), OFF and STL, into a welded Mesh with
-// normals from the file or computed with a crease angle.
+// normals from the file or computed with a crease angle, and UVs when the file has them
+// (OBJ vt; PLY u v, s t or texture_u texture_v).
 #pragma once
 
 #include <string>
@@ -17,6 +18,9 @@ struct RawMesh {
   //! Per corner (parallel to face_indices): row of `normals`, or -1. Empty when the file
   //! has per-vertex normals (then normals has one row per position) or none at all.
   std::vector<int64_t> corner_normals;
+  RowMatrixX2d texcoords;  //!< #T by 2 file texture coordinates (may be empty)
+  //! Per corner: row of `texcoords`, or -1; empty when they are per vertex (one row per position).
+  std::vector<int64_t> corner_texcoords;
 };
 
 struct LoadOptions {

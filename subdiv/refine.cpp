@@ -29,6 +29,7 @@
 #include <unordered_map>
 
 #include "subdiv/edge_table.h"
+#include "subdiv/exceptions.h"
 #include "subdiv/indexed_heap.h"
 
 namespace prtsub {
@@ -52,6 +53,7 @@ class Refiner {
     for (Eigen::Index i = 0; i < mesh.positions.rows(); ++i) pos_.push_back(mesh.positions.row(i).transpose());
     vpos_ = mesh.vertex_position;
     for (Eigen::Index i = 0; i < mesh.normals.rows(); ++i) nrm_.push_back(mesh.normals.row(i).transpose());
+    uv_.assign(mesh.uv.data(), mesh.uv.data() + mesh.uv.size());
     val_.assign(values.data(), values.data() + values.size());
     if (A_) attr_.assign(attributes->data(), attributes->data() + attributes->size());
     tri_ = mesh.triangles;
@@ -79,6 +81,7 @@ class Refiner {
     pos_.reserve(pos_.size() + extra);
     vpos_.reserve(vpos_.size() + extra);
     nrm_.reserve(nrm_.size() + extra);
+    uv_.reserve(uv_.size() + (uv_.empty() ? 0 : 2 * extra));
     val_.reserve(val_.size() + extra * static_cast<size_t>(K_));
     attr_.reserve(attr_.size() + extra * static_cast<size_t>(A_));
     edges_.reserve(budget * 3 / 2 + 16);
@@ -168,6 +171,7 @@ class Refiner {
     mesh_.vertex_position = vpos_;
     mesh_.normals.resize(static_cast<Eigen::Index>(nrm_.size()), 3);
     for (size_t i = 0; i < nrm_.size(); ++i) mesh_.normals.row(static_cast<Eigen::Index>(i)) = nrm_[i].transpose();
+    if (!uv_.empty()) mesh_.uv = Eigen::Map<RowMatrixX2d>(uv_.data(), static_cast<Eigen::Index>(vpos_.size()), 2);
     mesh_.triangles = tri_;
     mesh_.source_face = src_;
     values_out_ = Eigen::Map<RowMatrixXd>(val_.data(), static_cast<Eigen::Index>(vpos_.size()), K_);
@@ -318,6 +322,10 @@ class Refiner {
       if (!(n.norm() > 0)) n = nrm_[a];
     }
     nrm_.push_back(n.normalized());
+    if (!uv_.empty()) {  // a seam's two sides are different render pairs, each split on its own
+      const double u = 0.5 * (uv_[2 * size_t(a)] + uv_[2 * size_t(b)]), w = 0.5 * (uv_[2 * size_t(a) + 1] + uv_[2 * size_t(b) + 1]);
+      uv_.push_back(u), uv_.push_back(w);
+    }
     for (int i = 0; i < K_; ++i) val_.push_back(0.5 * (val_[size_t(a) * K_ + i] + val_[size_t(b) * K_ + i]));
     for (int i = 0; i < A_; ++i) attr_.push_back(0.5 * (attr_[size_t(a) * A_ + i] + attr_[size_t(b) * A_ + i]));
     pending_.push_back({v, a, b, position, pos_[position], nrm_.back()});
@@ -349,6 +357,7 @@ class Refiner {
   size_t heap_capacity_ = 0;
   std::vector<double> extra_;  // probe keys of faces not yet split
   std::vector<Eigen::Vector3d> pos_, nrm_;
+  std::vector<double> uv_;  // 2 per render vertex, or empty
   std::vector<uint32_t> vpos_, src_;
   std::vector<double> val_, attr_;
   std::vector<Triangle> tri_;
@@ -385,6 +394,9 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
     stats.min_angle_after_deg = stats.min_angle_before_deg;
     return stats;
   }
+  if (mesh.has_uv() && static_cast<size_t>(mesh.uv.rows()) != mesh.num_vertices())
+    throw InputError("refine: the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " +
+                     std::to_string(mesh.num_vertices()) + " render vertices");
   Refiner r(mesh, values, attributes, signal);
   stats.non_manifold_edges_kept = r.non_manifold_edges();
   r.reserve(options.budget);

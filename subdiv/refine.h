@@ -77,7 +77,7 @@ struct RefineStats {
 //! edge bisection (Rivara's LEPP), which splits an edge in every face that has it, so the mesh
 //! stays conforming across creases, boundaries and welded parts, and angles never fall below
 //! half the smallest input angle. New vertices lie at edge midpoints; normals (per crease
-//! side) are interpolated and renormalised, `attributes` (#V by A, e.g. UVs) interpolated
+//! side) are interpolated and renormalised, the mesh's UVs and `attributes` (#V by A) interpolated
 //! linearly, and every face keeps its source_face. Non-manifold edges are never split.
 //! A budget at or below the input's count leaves the mesh as it is (with a warning). Closed
 //! surfaces only hold even triangle counts (3F = 2E); an odd budget on one yields budget − 1.

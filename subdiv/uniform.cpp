@@ -21,6 +21,12 @@ namespace {
 namespace Far = OpenSubdiv::Far;
 namespace Sdc = OpenSubdiv::Sdc;
 
+struct Vec2 {
+  double u = 0, v = 0;
+  void Clear(void* = nullptr) { u = v = 0; }
+  void AddWithWeight(const Vec2& s, float w) { u += w * s.u, v += w * s.v; }
+};
+
 struct Vec3 {
   double x = 0, y = 0, z = 0;
   void Clear(void* = nullptr) { x = y = z = 0; }
@@ -39,6 +45,8 @@ UniformScheme parse_uniform_scheme(const std::string& name) {
 
 Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
   if (opt.levels < 1 || opt.levels > 8) throw InputError("--levels must be between 1 and 8");
+  if (mesh.has_uv() && static_cast<size_t>(mesh.uv.rows()) != mesh.num_vertices())
+    throw InputError("refine: the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " + std::to_string(mesh.num_vertices()) + " render vertices");
   const int F = static_cast<int>(mesh.num_faces());
   std::vector<int> verts_per_face(static_cast<size_t>(F), 3), pos_idx, fvar_idx;
   for (const Triangle& t : mesh.triangles)
@@ -91,14 +99,24 @@ Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
   std::vector<Vec3> nrm(static_cast<size_t>(refiner->GetNumFVarValuesTotal(0)));
   for (Eigen::Index i = 0; i < mesh.positions.rows(); ++i) pos[i] = {mesh.positions(i, 0), mesh.positions(i, 1), mesh.positions(i, 2)};
   for (Eigen::Index i = 0; i < mesh.normals.rows(); ++i) nrm[i] = {mesh.normals(i, 0), mesh.normals(i, 1), mesh.normals(i, 2)};
+  // UVs ride on the same face-varying channel (render vertices), linearly: a seam stays a seam.
+  std::vector<Vec2> uvs(mesh.has_uv() ? nrm.size() : 0);
+  for (Eigen::Index i = 0; i < mesh.uv.rows(); ++i) uvs[size_t(i)] = {mesh.uv(i, 0), mesh.uv(i, 1)};
   Far::PrimvarRefiner primvar(*refiner);
   Vec3 *psrc = pos.data(), *nsrc = nrm.data();
+  Vec2* usrc = uvs.data();
   for (int level = 1; level <= opt.levels; ++level) {
     Vec3* pdst = psrc + refiner->GetLevel(level - 1).GetNumVertices();
-    Vec3* ndst = nsrc + refiner->GetLevel(level - 1).GetNumFVarValues(0);
+    const int fvar_before = refiner->GetLevel(level - 1).GetNumFVarValues(0);
+    Vec3* ndst = nsrc + fvar_before;
     if (opt.scheme == UniformScheme::Linear) primvar.InterpolateVarying(level, psrc, pdst);
     else primvar.Interpolate(level, psrc, pdst);
     primvar.InterpolateFaceVarying(level, nsrc, ndst, 0);
+    if (mesh.has_uv()) {
+      Vec2* udst = usrc + fvar_before;
+      primvar.InterpolateFaceVarying(level, usrc, udst, 0);
+      usrc = udst;
+    }
     psrc = pdst, nsrc = ndst;
   }
 
@@ -119,7 +137,13 @@ Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
     raw.face_offsets.push_back(0);
     for (int f = 0; f < last.GetNumFaces(); ++f) {
       for (int v : last.GetFaceVertices(f)) raw.face_indices.push_back(v);
+      if (mesh.has_uv())
+        for (int v : last.GetFaceFVarValues(f, 0)) raw.corner_texcoords.push_back(v);
       raw.face_offsets.push_back(raw.face_indices.size());
+    }
+    if (mesh.has_uv()) {
+      raw.texcoords.resize(last.GetNumFVarValues(0), 2);
+      for (int i = 0; i < last.GetNumFVarValues(0); ++i) raw.texcoords.row(i) << usrc[i].u, usrc[i].v;
     }
     Mesh out = build_mesh(raw, "loop subdivision", LoadOptions{opt.crease_angle_deg});
     for (uint32_t& s : out.source_face) s = source[s];
@@ -142,6 +166,10 @@ Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
   for (int i = 0; i < nv; ++i) {
     Eigen::Vector3d n(nsrc[i].x, nsrc[i].y, nsrc[i].z);
     out.normals.row(i) = (n.norm() > 1e-12 ? n.normalized() : Eigen::Vector3d::UnitZ()).transpose();
+  }
+  if (mesh.has_uv()) {
+    out.uv.resize(nv, 2);
+    for (int i = 0; i < nv; ++i) out.uv.row(i) << usrc[i].u, usrc[i].v;
   }
   out.triangles.resize(static_cast<size_t>(last.GetNumFaces()));
   for (int f = 0; f < last.GetNumFaces(); ++f) {

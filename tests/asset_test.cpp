@@ -50,6 +50,26 @@ TEST(Asset, RoundTripsEveryField) {
   EXPECT_EQ(ply.element("face")->scalar_names, std::vector<std::string>{"source_face"});
 }
 
+TEST(Asset, UvsAreWrittenAfterTheNormalsOnlyWhenTheMeshHasThem) {
+  test::TempDir dir;
+  Mesh m = build_mesh(parse_obj(test::seam_square_obj(), "seam.obj"), "seam.obj");
+  ASSERT_TRUE(m.has_uv());
+  write_asset(dir.path("uv.ply"), m, ramp(m, 4), sh_convention_metadata(2));
+  Asset a = read_asset(dir.path("uv.ply"));
+  ASSERT_EQ(a.uv.rows(), m.uv.rows());
+  EXPECT_LT((a.uv - m.uv).cwiseAbs().maxCoeff(), 1e-7);  // float32
+  std::vector<std::string> expect = {"x", "y", "z", "nx", "ny", "nz", "u", "v", "t0", "t1", "t2", "t3"};
+  EXPECT_EQ(read_ply(dir.path("uv.ply")).element("vertex")->scalar_names, expect);
+  // A mesh without UVs: no u v properties at all.
+  Mesh cube = test::build(test::cube());
+  write_asset(dir.path("plain.ply"), cube, ramp(cube, 4), sh_convention_metadata(2));
+  EXPECT_EQ(read_asset(dir.path("plain.ply")).uv.rows(), 0);
+  // Non-finite UVs are refused, and nothing is written.
+  m.uv(0, 1) = NAN;
+  EXPECT_THROW(write_asset(dir.path("bad.ply"), m, ramp(m, 4), sh_convention_metadata(2)), InputError);
+  EXPECT_FALSE(test::file_exists(dir.path("bad.ply")));
+}
+
 TEST(Asset, NonFiniteTransferIsRefusedAndLeavesNoFile) {
   test::TempDir dir;
   Mesh m = test::build(test::cube());

@@ -105,6 +105,18 @@ RawMesh transformed(const RawMesh& m, double scale, const Eigen::Vector3d& offse
   return out;
 }
 
+std::string seam_square_obj() {
+  return "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\nvt 0.7 0.7\n"
+         "f 1/1 2/2 3/3\nf 1/5 3/6 4/4\n";
+}
+
+Eigen::Vector2d seam_uv(int side, const Eigen::Vector3d& p) {
+  if (side == 0) return {p.x(), p.y()};
+  // Through (0,0) -> (0.5,0.5), (1,1) -> (0.7,0.7), (0,1) -> (0,1).
+  return {0.5 + 0.7 * p.x() - 0.5 * p.y(), 0.5 - 0.3 * p.x() + 0.5 * p.y()};
+}
+
 Mesh build(const RawMesh& m, double crease_angle) { return build_mesh(m, "test", LoadOptions{crease_angle}); }
 
 void write_obj(const std::string& path, const RawMesh& m) {

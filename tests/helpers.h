@@ -17,6 +17,11 @@ RawMesh quad(double half, double height, bool facing_up, double x0 = NAN);
 RawMesh merge(const RawMesh& a, const RawMesh& b);
 //! Applies p -> scale * p + offset.
 RawMesh transformed(const RawMesh& m, double scale, const Eigen::Vector3d& offset);
+//! The unit square as two triangles (0,0,0) (1,0,0) (1,1,0) and (0,0,0) (1,1,0) (0,1,0), as an
+//! OBJ whose UVs are seamed along the diagonal: the first triangle maps by seam_uv(0, p) = (x, y),
+//! the second by the affine seam_uv(1, p), so each diagonal corner has one UV per side.
+std::string seam_square_obj();
+Eigen::Vector2d seam_uv(int side, const Eigen::Vector3d& p);
 //! Builds a Mesh with default options.
 Mesh build(const RawMesh& m, double crease_angle = 60.0);
 

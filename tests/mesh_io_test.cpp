@@ -125,6 +125,42 @@ TEST_F(MeshIo, PlyNormalsAreUsedAsGiven) {
   EXPECT_NEAR(m.normals(2, 0), 1.0, 1e-12);
 }
 
+TEST_F(MeshIo, TextureCoordinatesMakeSeamsLikeCreases) {
+  // OBJ vt per corner: the two diagonal corners have one UV per side, so 4 positions and 6
+  // render vertices; each corner keeps the UV the file gave it.
+  Mesh m = load_mesh(file("seam.obj", test::seam_square_obj()));
+  ASSERT_TRUE(m.has_uv());
+  EXPECT_EQ(m.positions.rows(), 4);
+  EXPECT_EQ(m.num_vertices(), 6u);
+  ASSERT_EQ(static_cast<size_t>(m.uv.rows()), m.num_vertices());
+  for (size_t f = 0; f < 2; ++f)
+    for (uint32_t v : m.triangles[f])
+      EXPECT_EQ((m.uv.row(v).transpose() - test::seam_uv(int(f), m.point(v))).norm(), 0.0);
+  EXPECT_EQ(m.defects.corners_without_uv, 0u);
+  // Shared UVs on the diagonal: no seam, one render vertex per position.
+  Mesh joined = load_mesh(file("j.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                        "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n"));
+  EXPECT_EQ(joined.num_vertices(), 4u);
+  // A face without vt in a mesh with UVs: (0, 0), counted.
+  Mesh partial = load_mesh(file("p.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0.5 0.25\nf 1/1 2/1 3/1\nf 1 3 4\n"));
+  EXPECT_EQ(partial.defects.corners_without_uv, 3u);
+  EXPECT_EQ(partial.num_vertices(), 6u);  // corners 1 and 3 differ in UV between the faces
+  // PLY per-vertex u v (also s t): one UV per position.
+  Mesh ply = load_mesh(file("uv.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                                      "property double z\nproperty float s\nproperty float t\n"
+                                      "element face 1\nproperty list uchar uint vertex_index\nend_header\n"
+                                      "0 0 0 0.25 0.5\n1 0 0 0.75 0.5\n0 1 0 0.25 1\n3 0 1 2\n"));
+  ASSERT_TRUE(ply.has_uv());
+  EXPECT_EQ(ply.uv(1, 0), 0.75);
+  EXPECT_EQ(ply.uv(2, 1), 1.0);
+  // Without UVs in the file there are none, rather than zeros.
+  EXPECT_FALSE(load_mesh(file("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).has_uv());
+  // Bad UVs are an error naming the file.
+  expect_error(file("r.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"), "texture coordinate index 2 out of range");
+  expect_error(file("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt nan 0\nf 1/1 2/1 3/1\n"), "texture coordinate 0 is not finite");
+  expect_error(file("e.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt\nf 1/1 2/1 3/1\n"), "expected a texture coordinate");
+}
+
 TEST_F(MeshIo, WeldsExactPositionsIncludingSignedZero) {
   // Two triangles whose shared edge is written twice, once with -0.
   Mesh m = load_mesh(file("w.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv -0 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 4 5 6\n"));

@@ -225,6 +225,33 @@ TEST(Refine, CreasesKeepOneVertexPerSideAndNormalsStayExact) {
   }
 }
 
+TEST(Refine, UvSeamsRefinePerSideWithMidpointUvs) {
+  // The seamed square, refined across a step: every corner's UV is its side's affine map of its
+  // position (midpoints of linear UVs are exact), so a vertex on the seam has one UV per side.
+  Mesh m = build_mesh(parse_obj(test::seam_square_obj(), "seam.obj"), "seam.obj");
+  StepSignal s;
+  s.x0 = 0.45, s.width = 0.05;
+  RowMatrixXd v = s.initial(m);
+  refine_adaptive(m, v, s, RefineOptions{60, 4, 0});
+  EXPECT_EQ(m.num_faces(), 60u);
+  ASSERT_EQ(static_cast<size_t>(m.uv.rows()), m.num_vertices());
+  std::map<uint32_t, std::set<int>> sides_at;  // position on the open diagonal -> sides seen
+  for (size_t f = 0; f < m.num_faces(); ++f)
+    for (uint32_t c : m.triangles[f]) {
+      const int side = int(m.source_face[f]);
+      EXPECT_LT((m.uv.row(c).transpose() - test::seam_uv(side, m.point(c))).norm(), 1e-14);
+      const Eigen::Vector3d p = m.point(c);
+      if (p.x() == p.y() && p.x() > 0 && p.x() < 1) sides_at[m.vertex_position[c]].insert(side);
+    }
+  ASSERT_FALSE(sides_at.empty());  // the diagonal was split
+  for (auto& [p, sides] : sides_at) {
+    EXPECT_EQ(sides.size(), 2u);
+    size_t render = 0;
+    for (uint32_t i = 0; i < m.num_vertices(); ++i) render += m.vertex_position[i] == p;
+    EXPECT_EQ(render, 2u);  // one render vertex per side
+  }
+}
+
 TEST(Refine, NonManifoldEdgesAreNeverSplit) {
   // Three triangles on the edge (0,0,0)-(1,0,0): a fin.
   RawMesh fin;

@@ -51,6 +51,23 @@ TEST(Uniform, CreasesRefinePerSideAndLoopSmooths) {
   EXPECT_GT(moved, 1e-3);  // Loop pulls midpoints off the flat faces
 }
 
+TEST(Uniform, UvsAreInterpolatedPerSideOfASeam) {
+  const Mesh m = build_mesh(parse_obj(test::seam_square_obj(), "seam.obj"), "seam.obj");
+  const Mesh u = refine_uniform(m, UniformOptions{2, UniformScheme::Linear, 60});
+  ASSERT_EQ(static_cast<size_t>(u.uv.rows()), u.num_vertices());
+  for (size_t f = 0; f < u.num_faces(); ++f)
+    for (uint32_t c : u.triangles[f])
+      EXPECT_LT((u.uv.row(c).transpose() - test::seam_uv(int(u.source_face[f]), u.point(c))).norm(), 1e-12);
+  // Loop moves positions, not UVs: they are still each side's linear interpolation, so they stay
+  // inside the hull of the side's input UVs.
+  const Mesh loop = refine_uniform(m, UniformOptions{1, UniformScheme::Loop, 60});
+  ASSERT_EQ(static_cast<size_t>(loop.uv.rows()), loop.num_vertices());
+  EXPECT_TRUE(loop.uv.allFinite());
+  EXPECT_GE(loop.uv.minCoeff(), 0.0);
+  EXPECT_LE(loop.uv.maxCoeff(), 1.0);
+  EXPECT_GT(loop.num_vertices(), static_cast<size_t>(loop.positions.rows()));  // the seam survives
+}
+
 TEST(Estimates, ClosedForms) {
   double a[2] = {3, 4}, b[2] = {0, 0}, c[2] = {3, 4};
   EdgeView e{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 1, 0), a, b, 2};
