@@ -29,10 +29,7 @@ for f in "$S/cornell_box.obj" "$S/house_on_site.obj" "$O/scenes/spot_on_ground.o
 done
 
 # 3. Refinement overhead and scaling: four budgets up to 200k on the teapot.
-for T in 25000 50000 100000 200000; do
-  "$B" bake "$S/teapot.obj" -o "$O/teapot_$T.ply" --refine adaptive --budget $T --rays 64 --report "$O/scaling_$T.json" > /dev/null
-  "$B" bake "$S/teapot.obj" -o "$O/teapot_$T.ply" --refine adaptive --budget $T --report "$O/scaling256_$T.json" > /dev/null
-done
+bash "$here/refine_scaling.sh" "$1" "$S" "$O"
 
 # 4. Batch size: time and error at 64x the input on two contact-shadow scenes.
 for f in "$S/house_on_site.obj" "$O/scenes/spot_on_ground.obj"; do

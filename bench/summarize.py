@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Prints the Markdown tables of BENCHMARKS.md (issue 4) from the outputs of bench/refine.sh.
-usage: summarize.py OUT_DIR"""
+usage: summarize.py OUT_DIR [--scaling-only]   (--scaling-only: bench/refine_scaling.sh's tables)"""
 import json
 import math
 import os
 import sys
 
 out = sys.argv[1]
+scaling_only = "--scaling-only" in sys.argv[2:]
 
 
 def load(path):
@@ -14,8 +15,25 @@ def load(path):
         return json.load(f)
 
 
+def print_scaling():
+    for name, rays in (("scaling", 64), ("scaling256", 256)):
+        print("\n### Refinement time at four budgets (teapot, 15,704 triangles in, %d rays per vertex)\n" % rays)
+        print("| budget | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns |")
+        print("|---:|---:|---:|---:|---:|---:|")
+        for T in (25000, 50000, 100000, 200000):
+            r = load(os.path.join(out, "%s_%d.json" % (name, T)))
+            total, traced = r["seconds_refine"], r["seconds_refine_rays"]
+            over = total - traced
+            print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, traced, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
+
+
 def rows(d):
     return load(os.path.join(d, "results.json"))["runs"]
+
+
+if scaling_only:
+    print_scaling()
+    sys.exit(0)
 
 
 print("### Estimates: RMS error (%) by scene and budget\n")
@@ -62,15 +80,7 @@ for scene in sorted(os.listdir(tdir)):
     print("| %s | %d | %.3f | %.3f | %.2f | %.3f | %.2f | %s | %.2f | %.3f |" % (scene, u3["triangles"], u3["rms_percent"], ad["length"],
           ad["length"] / u3["rms_percent"], ad["probe"], ad["probe"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
 
-for name, rays in (("scaling", 64), ("scaling256", 256)):
-    print("\n### Refinement time at four budgets (teapot, 15,704 triangles in, %d rays per vertex)\n" % rays)
-    print("| budget | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns |")
-    print("|---:|---:|---:|---:|---:|---:|")
-    for T in (25000, 50000, 100000, 200000):
-        r = load(os.path.join(out, "%s_%d.json" % (name, T)))
-        total, traced = r["seconds_refine"], r["seconds_refine_rays"]
-        over = total - traced
-        print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, traced, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
+print_scaling()
 
 print("\n### Batch size (64x the input, 64 rays per vertex)\n")
 print("| scene | batch | refine s | tracing s | batches | RMS % |")

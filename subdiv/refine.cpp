@@ -28,7 +28,6 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "subdiv/edge_table.h"
 #include "subdiv/exceptions.h"
 #include "subdiv/indexed_heap.h"
 
@@ -39,10 +38,9 @@ using Key = std::pair<double, double>;  // (error, area)
 
 inline uint64_t edge_key(uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
 
-struct EdgeFaces {
-  uint32_t f[2] = {UINT32_MAX, UINT32_MAX};
-  uint32_t count = 0;  // > 2: non-manifold
-};
+// Per corner slot 3f + k (the edge from corner k to k + 1): the slot of the same edge in the
+// face across it, or one of these.
+constexpr uint32_t kBoundary = UINT32_MAX, kNonManifold = UINT32_MAX - 1;
 
 class Refiner {
  public:
@@ -58,18 +56,12 @@ class Refiner {
     if (A_) attr_.assign(attributes->data(), attributes->data() + attributes->size());
     tri_ = mesh.triangles;
     src_ = mesh.source_face;
-    edges_ = EdgeTable<EdgeFaces>(tri_.size() * 3 / 2);
-    for (uint32_t f = 0; f < tri_.size(); ++f)
-      for (int k = 0; k < 3; ++k) add_face(edge_key(pos_of(f, k), pos_of(f, k + 1)), f);
+    link_faces();
     const double diag = mesh.positions.rows() ? bounds(mesh.positions).diagonal() : 0.0;
     min_area_ = (1e-7 * diag) * (1e-7 * diag);  // the loader's zero-area threshold
   }
 
-  size_t non_manifold_edges() const {
-    size_t n = 0;
-    edges_.for_each([&](uint64_t, const EdgeFaces& e) { n += e.count > 2; });
-    return n;
-  }
+  size_t non_manifold_edges() const { return non_manifold_edges_; }
   size_t faces() const { return tri_.size(); }
 
   // Everything grows with every split; sizing it for the budget once avoids repeated copies
@@ -84,7 +76,7 @@ class Refiner {
     uv_.reserve(uv_.size() + (uv_.empty() ? 0 : 2 * extra));
     val_.reserve(val_.size() + extra * static_cast<size_t>(K_));
     attr_.reserve(attr_.size() + extra * static_cast<size_t>(A_));
-    edges_.reserve(budget * 3 / 2 + 16);
+    link_.reserve(3 * budget);
     heap_capacity_ = budget;
   }
 
@@ -128,7 +120,7 @@ class Refiner {
     double e = 0;
     for (int k = 0; k < 3; ++k) {
       uint32_t a = tri_[f][k], b = tri_[f][(k + 1) % 3];
-      if (edges_.at(edge_key(vpos_[a], vpos_[b])).count > 2) continue;  // never split: no say
+      if (link_[3 * size_t(f) + size_t(k)] == kNonManifold) continue;  // never split: no say
       EdgeView v{pos_[vpos_[a]], pos_[vpos_[b]], nrm_[a], nrm_[b], &val_[size_t(a) * K_], &val_[size_t(b) * K_], K_};
       e += signal_.edge_error(v);
     }
@@ -184,15 +176,33 @@ class Refiner {
     return 0.5 * (pos_[pos_of(f, 1)] - pos_[pos_of(f, 0)]).cross(pos_[pos_of(f, 2)] - pos_[pos_of(f, 0)]).norm();
   }
 
-  void add_face(uint64_t e, uint32_t f) {
-    EdgeFaces& ef = edges_[e];
-    if (ef.count < 2) ef.f[ef.count] = f;
-    ++ef.count;
+  // Pairs every corner slot with the slot of the same position edge in the other face on it:
+  // half-edges sorted by position edge, a run of two is a pair (in either winding), one is a
+  // boundary, three or more are non-manifold. Splits keep the links up to date, so refinement
+  // never looks an edge up by key (a hash lookup per step cost about a third of its time).
+  void link_faces() {
+    std::vector<std::pair<uint64_t, uint32_t>> half;
+    half.reserve(tri_.size() * 3);
+    for (uint32_t f = 0; f < tri_.size(); ++f)
+      for (uint32_t k = 0; k < 3; ++k) half.emplace_back(edge_key(pos_of(f, int(k)), pos_of(f, int(k) + 1)), 3 * f + k);
+    std::sort(half.begin(), half.end());
+    link_.assign(half.size(), kBoundary);
+    for (size_t r = 0; r < half.size();) {
+      size_t end = r + 1;
+      while (end < half.size() && half[end].first == half[r].first) ++end;
+      if (end - r == 2) {
+        link_[half[r].second] = half[r + 1].second;
+        link_[half[r + 1].second] = half[r].second;
+      } else if (end - r > 2) {
+        ++non_manifold_edges_;
+        for (size_t i = r; i < end; ++i) link_[half[i].second] = kNonManifold;
+      }
+      r = end;
+    }
   }
-  void replace_face(uint64_t e, uint32_t from, uint32_t to) {
-    EdgeFaces& ef = edges_.at(e);
-    for (uint32_t& x : ef.f)
-      if (x == from) x = to;
+  void pair(uint32_t s, uint32_t t) {
+    link_[s] = t;
+    if (t < kNonManifold) link_[t] = s;
   }
 
   // Corner k whose edge (k, k+1) is the face's longest splittable edge in the total order
@@ -202,9 +212,9 @@ class Refiner {
     double best_len = -1;
     uint64_t best_key = 0;
     for (int k = 0; k < 3; ++k) {
+      if (link_[3 * size_t(f) + size_t(k)] == kNonManifold) continue;
       uint32_t a = pos_of(f, k), b = pos_of(f, k + 1);
       uint64_t key = edge_key(a, b);
-      if (edges_.at(key).count > 2) continue;
       double len = (pos_[a] - pos_[b]).squaredNorm();
       if (len > best_len || (len == best_len && key > best_key)) best = k, best_len = len, best_key = key;
     }
@@ -226,21 +236,20 @@ class Refiner {
       const uint32_t cur = path_.back();
       const int k = longest_edge(cur);
       if (k < 0) return true;  // nothing splittable in t (only t can lack a splittable edge)
-      const uint64_t e = edge_key(pos_of(cur, k), pos_of(cur, k + 1));
-      const EdgeFaces& ef = edges_.at(e);
-      if (ef.count == 2) {
-        const uint32_t other = ef.f[0] == cur ? ef.f[1] : ef.f[0];
+      const uint32_t across = link_[3 * size_t(cur) + size_t(k)];
+      const uint32_t other = across == kBoundary ? UINT32_MAX : across / 3;
+      if (across != kBoundary) {
         const int k2 = longest_edge(other);
         // A neighbour without area has no quality to keep: split the shared edge now rather
         // than follow the path along a degenerate (collinear) strip, which only makes more.
-        if (area(other) > min_area_ && edge_key(pos_of(other, k2), pos_of(other, k2 + 1)) != e) {
+        if (area(other) > min_area_ && k2 != int(across % 3)) {
           path_.push_back(other);  // the neighbour has a longer edge: refine there first
           continue;
         }
       }
-      if (tri_.size() + ef.count > budget) return false;
-      const bool hit_t = ef.f[0] == t || ef.f[1] == t;
-      split(e, stats);
+      if (tri_.size() + (across == kBoundary ? 1 : 2) > budget) return false;
+      const bool hit_t = cur == t || other == t;
+      split(cur, k, stats);
       if (hit_t) return true;
       path_.pop_back();  // cur was split; its predecessor's longest edge still leads here
     }
@@ -250,67 +259,77 @@ class Refiner {
   // ranked face that has one.
   bool split_best_boundary(IndexedHeap<Key>& heap, RefineStats& stats) {
     uint32_t best = UINT32_MAX;
-    uint64_t best_edge = 0;
+    int best_corner = 0;
     for (uint32_t f = 0; f < tri_.size(); ++f) {
       if (!heap.contains(f)) continue;
       double best_len = -1;
-      uint64_t edge = 0;
+      int corner = 0;
       for (int k = 0; k < 3; ++k) {
-        uint64_t e = edge_key(pos_of(f, k), pos_of(f, k + 1));
-        if (edges_.at(e).count != 1) continue;
+        if (link_[3 * size_t(f) + size_t(k)] != kBoundary) continue;
         double len = (pos_[pos_of(f, k)] - pos_[pos_of(f, k + 1)]).squaredNorm();
-        if (len > best_len) best_len = len, edge = e;
+        if (len > best_len) best_len = len, corner = k;
       }
       if (best_len < 0) continue;
       if (best == UINT32_MAX || heap.key(f) > heap.key(best) || (!(heap.key(best) > heap.key(f)) && f < best))
-        best = f, best_edge = edge;
+        best = f, best_corner = corner;
     }
     if (best == UINT32_MAX) return false;
-    split(best_edge, stats);
+    split(best, best_corner, stats);
     return true;
   }
 
-  void split(uint64_t e, RefineStats& stats) {
-    EdgeFaces ef = edges_.at(e);
-    const uint32_t p = static_cast<uint32_t>(e >> 32), q = static_cast<uint32_t>(e & 0xFFFFFFFFu);
+  // Splits the edge of face f0 from corner k0 to k0 + 1, in every face on it (one or two).
+  void split(uint32_t f0, int k0, RefineStats& stats) {
+    const uint32_t across = link_[3 * size_t(f0) + size_t(k0)];
+    struct Side {
+      uint32_t f, k, a_pos;  // face, corner, the position its edge starts at
+      uint32_t piece_a, piece_b;  // after the split: the slots of (a, m) and (m, b)
+    } side[2];
+    const int sides = across == kBoundary ? 1 : 2;
+    side[0] = {f0, uint32_t(k0), pos_of(f0, k0), 0, 0};
+    if (sides == 2) side[1] = {across / 3, across % 3, pos_of(across / 3, int(across % 3)), 0, 0};
     const uint32_t m = static_cast<uint32_t>(pos_.size());
-    pos_.push_back(0.5 * (pos_[p] + pos_[q]));
-    edges_.erase(e);
+    pos_.push_back(0.5 * (pos_[pos_of(f0, k0)] + pos_[pos_of(f0, k0 + 1)]));
     std::pair<uint64_t, uint32_t> made[2];  // (render pair, new render vertex) of this split
     int n_made = 0;
-    for (uint32_t s = 0; s < ef.count; ++s) {
-      const uint32_t f = ef.f[s];
-      int k = 0;
-      while (edge_key(pos_of(f, k), pos_of(f, k + 1)) != e) ++k;
-      const uint32_t a = tri_[f][k], b = tri_[f][(k + 1) % 3], c = tri_[f][(k + 2) % 3];
-      const uint64_t pair = edge_key(a, b);
+    for (int s = 0; s < sides; ++s) {
+      const uint32_t f = side[s].f, k = side[s].k, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      const uint32_t a = tri_[f][k], b = tri_[f][k1], c = tri_[f][k2];
+      const uint64_t pair_key = edge_key(a, b);
       uint32_t mv = UINT32_MAX;
       for (int i = 0; i < n_made; ++i)
-        if (made[i].first == pair) mv = made[i].second;
+        if (made[i].first == pair_key) mv = made[i].second;
       if (mv == UINT32_MAX) {
         mv = new_vertex(m, a, b, f);
-        made[n_made++] = {pair, mv};
+        made[n_made++] = {pair_key, mv};
       }
       const uint32_t g = static_cast<uint32_t>(tri_.size());
       Triangle tf = tri_[f], tg;
-      tf[(k + 1) % 3] = mv;  // f = (a, mv, c) in f's own corner order
-      tg[k] = mv, tg[(k + 1) % 3] = b, tg[(k + 2) % 3] = c;  // g = (mv, b, c)
+      tf[k1] = mv;  // f = (a, mv, c) in f's own corner order
+      tg[k] = mv, tg[k1] = b, tg[k2] = c;  // g = (mv, b, c)
       tri_[f] = tf;
       tri_.push_back(tg);
       src_.push_back(src_[f]);
-      const uint32_t pa = vpos_[a], pb = vpos_[b], pc = vpos_[c];
-      add_face(edge_key(pa, m), f);
-      add_face(edge_key(m, pb), g);
-      add_face(edge_key(m, pc), f);
-      add_face(edge_key(m, pc), g);
-      replace_face(edge_key(pb, pc), f, g);
+      // Links: g takes f's edge (b, c); (mv, c) joins f and g; (c, a) stays with f.
+      const uint32_t bc = link_[3 * size_t(f) + k1];
+      link_.insert(link_.end(), {kBoundary, kBoundary, kBoundary});
+      pair(3 * g + k1, bc);
+      pair(3 * f + k1, 3 * g + k2);
+      side[s].piece_a = 3 * f + k, side[s].piece_b = 3 * g + k;
       if (heap_) heap_->remove(f);
       if (f < extra_.size()) extra_[f] = 0;  // a probe speaks for the face it was taken in only
       dirty_.push_back(f);
       dirty_.push_back(g);
     }
+    if (sides == 1) {
+      link_[side[0].piece_a] = link_[side[0].piece_b] = kBoundary;
+    } else if (side[0].a_pos == side[1].a_pos) {  // the two faces wind the edge the same way
+      pair(side[0].piece_a, side[1].piece_a), pair(side[0].piece_b, side[1].piece_b);
+    } else {
+      pair(side[0].piece_a, side[1].piece_b), pair(side[0].piece_b, side[1].piece_a);
+    }
     ++stats.splits;
-    if (ef.count == 1) ++stats.boundary_splits;
+    if (sides == 1) ++stats.boundary_splits;
   }
 
   uint32_t new_vertex(uint32_t position, uint32_t a, uint32_t b, uint32_t face) {
@@ -361,7 +380,8 @@ class Refiner {
   std::vector<uint32_t> vpos_, src_;
   std::vector<double> val_, attr_;
   std::vector<Triangle> tri_;
-  EdgeTable<EdgeFaces> edges_;
+  std::vector<uint32_t> link_;  // per corner slot: see kBoundary
+  size_t non_manifold_edges_ = 0;
   std::vector<NewVertex> pending_;
   std::vector<uint32_t> dirty_;
   std::vector<uint32_t> path_;
