@@ -1,7 +1,8 @@
 // Budgeted adaptive refinement by longest-edge bisection.
 //
-// Topology is kept over positions: a map from each position edge to the faces that use it
-// (up to two; more marks the edge non-manifold and it is never split). Splitting an edge
+// Topology is kept over positions: each face corner links to the corner of the same position
+// edge in the face across it, or marks the edge a boundary or non-manifold (more than two
+// faces; never split). Links tolerate faces that wind an edge the same way. Splitting an edge
 // inserts one position at its midpoint and splits every face on it, so the mesh is conforming
 // after every split: an interior edge adds two triangles, a boundary edge one. Each face
 // sees the edge through its own render vertices: faces across a smooth edge share their
@@ -26,7 +27,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <unordered_map>
 
 #include "subdiv/exceptions.h"
 #include "subdiv/indexed_heap.h"

@@ -6,10 +6,8 @@
 #include <set>
 
 #include "helpers.h"
-#include "subdiv/edge_table.h"
 #include "subdiv/indexed_heap.h"
 #include "prt/sampling.h"
-#include <unordered_map>
 
 namespace prtsub {
 namespace {
@@ -76,36 +74,6 @@ TEST(IndexedHeap, PopsByKeyThenIdAndSupportsUpdateAndRemove) {
   std::vector<uint32_t> order;
   while (!h.empty()) order.push_back(h.pop());
   EXPECT_EQ(order, (std::vector<uint32_t>{3, 2, 1}));
-}
-
-TEST(EdgeTable, MatchesAStandardMapUnderRandomInsertsAndErases) {
-  // Backward-shift deletion must keep every probe run intact: compare against std::unordered_map
-  // after every operation batch, with keys drawn from a small range so runs collide and wrap.
-  EdgeTable<int> table(4);
-  std::unordered_map<uint64_t, int> reference;
-  Rng rng(5, 5);
-  for (int step = 0; step < 20000; ++step) {
-    uint64_t key = rng.next() % 512;
-    if (rng.uniform() < 0.6) {
-      int v = static_cast<int>(rng.next() % 1000);
-      table[key] = v;
-      reference[key] = v;
-    } else {
-      table.erase(key);
-      reference.erase(key);
-    }
-    if (step % 997 == 0) {
-      ASSERT_EQ(table.size(), reference.size());
-      for (auto [k, v] : reference) ASSERT_EQ(table.at(k), v);
-      size_t seen = 0;
-      table.for_each([&](uint64_t k, int v) {
-        ++seen;
-        EXPECT_EQ(reference.at(k), v);
-      });
-      EXPECT_EQ(seen, reference.size());
-    }
-  }
-  EXPECT_THROW(table.at(100000), std::out_of_range);
 }
 
 TEST(Refine, ClosedMeshStaysConformingWithExactBudgetAndArea) {
