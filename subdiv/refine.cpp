@@ -18,8 +18,9 @@
 //
 // Work comes in batches: pop `batch` faces and split them with provisional values (linear
 // interpolation), then ask the signal for the new vertices' true values all at once (Embree
-// traces them in parallel), then key the new faces. Results depend on the batch size but not
-// on threads. The budget is exact except where parity forbids it: a closed surface has
+// traces them in parallel), then key the new faces. A batch is at most 1/16 of the current
+// faces: keys go stale within a batch, and on the 32-triangle Cornell box a fixed 256 spent the
+// first batches on starting keys. Results depend on the batch size but not on threads. The budget is exact except where parity forbids it: a closed surface has
 // 3F = 2E, so F is even, and with no boundary edge left to split an odd budget stops one
 // short (reported as a warning).
 #include "subdiv/refine.h"
@@ -41,6 +42,8 @@ inline uint64_t edge_key(uint32_t a, uint32_t b) { return (uint64_t(std::min(a, 
 // Per corner slot 3f + k (the edge from corner k to k + 1): the slot of the same edge in the
 // face across it, or one of these.
 constexpr uint32_t kBoundary = UINT32_MAX, kNonManifold = UINT32_MAX - 1;
+// A batch pops at most 1/kBatchShare of the current faces (and at most RefineOptions::batch).
+constexpr size_t kBatchShare = 16;
 
 class Refiner {
  public:
@@ -94,7 +97,11 @@ class Refiner {
     while (tri_.size() < budget && !heap.empty()) {
       pending_.clear();
       dirty_.clear();
-      for (size_t i = 0; i < batch && tri_.size() < budget && !heap.empty(); ++i) {
+      // Keys go stale within a batch (new faces wait for their values), so a batch is at most a
+      // share of the faces there are: on a 32-triangle scene a batch of 256 would spend the
+      // first eight times the mesh on its starting keys.
+      const size_t n = std::min(batch, std::max<size_t>(1, tri_.size() / kBatchShare));
+      for (size_t i = 0; i < n && tri_.size() < budget && !heap.empty(); ++i) {
         uint32_t t = heap.pop();
         if (!lepp(t, budget, stats)) {
           // The split needs two triangles and one is left: end on a boundary split if any.

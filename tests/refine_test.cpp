@@ -110,6 +110,18 @@ TEST(Refine, RefinesWhereTheSignalChanges) {
   EXPECT_GT(near, s.created.size() * 8 / 10) << near << " of " << s.created.size();
 }
 
+TEST(Refine, ABatchIsAtMostASixteenthOfTheFaces) {
+  // 8 faces to 400: with batches of 256 the first would split on the 8 starting keys alone.
+  // The cap grows the batch with the mesh: 1 face while under 32, then F/16.
+  Mesh m = test::build(grid(2));
+  StepSignal s;
+  RowMatrixXd v = s.initial(m);
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{400, 256, 0});
+  EXPECT_EQ(m.num_faces(), 400u);
+  // Uncapped, one or two batches of 256 pops would do; capped, it takes 29.
+  EXPECT_GT(st.batches, 10u) << st.faces_popped << " faces popped";
+}
+
 TEST(Refine, BudgetParityAndTrivialBudgets) {
   StepSignal s;
   {  // below the input: unchanged, with a warning
