@@ -13,13 +13,8 @@ triangles() {  # input triangle count, from a one-ray bake's report
   python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['triangles_out'])" "$O/count.json"
 }
 
-# 1. Which estimate wins, on every scene: adaptive at 2x and 4x the input (4x is uniform level 1).
-for f in "$S"/*.obj "$S"/*.ply; do
-  n=$(basename "${f%.*}"); F=$(triangles "$f")
-  echo "== estimates: $n ($F triangles)"
-  "$B" compare "$f" --budgets $((2 * F)),$((4 * F)) --max-levels 1 --rays 64 --eval-points 20000 \
-    --frame-size 320,240 --frame-rays 64 -o "$O/estimates/$n"
-done
+# 1. Which estimate wins, on every scene.
+bash "$here/estimates.sh" "$1" "$S" "$O"
 
 # 2. The targets: contact-shadow scenes at the triangle count of uniform level 3.
 for f in "$S/cornell_box.obj" "$S/house_on_site.obj" "$O/scenes/spot_on_ground.obj" "$O/scenes/icosphere_on_plane.obj"; do

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Prints the Markdown tables of BENCHMARKS.md (issue 4) from the outputs of bench/refine.sh.
-usage: summarize.py OUT_DIR [--scaling-only]   (--scaling-only: bench/refine_scaling.sh's tables)"""
+usage: summarize.py OUT_DIR [--scaling-only | --estimates-only]   (--scaling-only: bench/refine_scaling.sh's tables)"""
 import json
 import math
 import os
@@ -8,6 +8,7 @@ import sys
 
 out = sys.argv[1]
 scaling_only = "--scaling-only" in sys.argv[2:]
+estimates_only = "--estimates-only" in sys.argv[2:]
 
 
 def load(path):
@@ -38,26 +39,28 @@ if scaling_only:
 
 print("### Estimates: RMS error (%) by scene and budget\n")
 est_dir = os.path.join(out, "estimates")
-estimates = ["relative", "shadow", "curvature", "length", "probe"]
+estimates = ["relative", "shadow", "curvature", "length", "probe", "root"]
+default = "root"
 print("| scene | input | budget | uniform | " + " | ".join(estimates) + " | best |")
 print("|---|---:|---:|---:|" + "---:|" * len(estimates) + "---|")
 wins = {e: 0 for e in estimates}
 ratios = {e: [] for e in estimates}
 worse_than_uniform = []
-for scene in sorted(os.listdir(est_dir)):
+for scene in sorted(d for d in os.listdir(est_dir) if os.path.isdir(os.path.join(est_dir, d))):
     rs = rows(os.path.join(est_dir, scene))
     base = [r for r in rs if r["method"] == "none"][0]
     uni = {r["triangles"]: r["rms_percent"] for r in rs if r["method"] == "uniform"}
     counts = sorted({r["triangles"] for r in rs if r["method"] == "adaptive"})
     for c in counts:
-        by = {r["estimate"]: r["rms_percent"] for r in rs if r["method"] == "adaptive" and r["triangles"] == c}
+        by = {r["estimate"]: r["rms_percent"] for r in rs
+              if r["method"] == "adaptive" and r["triangles"] == c and r.get("fit", "point") == "point"}
         best = min(by, key=by.get)
         wins[best] += 1
         for e in estimates:
             ratios[e].append(by[e] / by[best])
         u = uni.get(c)
-        if u is not None and by["probe"] > u:
-            worse_than_uniform.append((scene, c, by["probe"], u))
+        if u is not None and by[default] > u:
+            worse_than_uniform.append((scene, c, by[default], u))
         cells = " | ".join(("**%.3f**" if e == best else "%.3f") % by[e] for e in estimates)
         print("| %s | %d | %d | %s | %s | %s |" % (scene, base["triangles"], c, "%.3f" % u if u is not None else "", cells, best))
 print()
@@ -65,7 +68,10 @@ print("Wins: " + ", ".join("%s %d" % (e, wins[e]) for e in estimates) + ".  ")
 print("Geometric mean of error relative to the best estimate: " +
       ", ".join("%s %.3f" % (e, math.exp(sum(math.log(x) for x in ratios[e]) / len(ratios[e]))) for e in estimates) + ".")
 if worse_than_uniform:
-    print("\nAdaptive (probe) worse than uniform: " + "; ".join("%s at %d: %.3f vs %.3f" % w for w in worse_than_uniform))
+    print("\nAdaptive (%s) worse than uniform: " % default + "" + "; ".join("%s at %d: %.3f vs %.3f" % w for w in worse_than_uniform))
+
+if estimates_only:
+    sys.exit(0)
 
 print("\n### Targets: uniform level 3 against adaptive at the same count\n")
 print("| scene | triangles | uniform RMS % | adaptive (length) RMS % | ratio | adaptive (probe) RMS % | ratio | best estimate | its ratio | noise floor % |")

@@ -100,7 +100,7 @@ std::string cg_note(const FitStats& f) {
 int cmd_bake(int argc, char** argv) {
   CommonOptions c;
   BakeSettings b;
-  std::string output, estimate = "probe", scheme = "linear";
+  std::string output, estimate = "root", scheme = "linear";
   int budget = 0;
   ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset (binary PLY).\n"
                          "With --refine, first refines the mesh: adaptively to a triangle budget where the transfer\n"
@@ -110,7 +110,7 @@ int cmd_bake(int argc, char** argv) {
   args.alias("-o", "--output");
   args.option("--refine", "none|adaptive|uniform", "refinement [default none]", &b.refine);
   args.option("--budget", "T", "adaptive: output triangle count", &budget, 0, 1 << 30);
-  args.option("--estimate", "relative|shadow|curvature|length|probe", "adaptive: edge error estimate [default probe]", &estimate);
+  args.option("--estimate", "relative|shadow|curvature|length|probe|root", "adaptive: edge error estimate [default root]", &estimate);
   args.option("--max-edge", "L", "adaptive: first split edges longer than L (0: off)", &b.max_edge, 0.0, 1e30);
   int batch = 256;
   args.option("--batch", "B", "adaptive: faces split per Embree batch", &batch, 1, 1 << 20);

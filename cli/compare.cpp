@@ -140,7 +140,7 @@ std::string svg_plot(const std::map<std::string, std::vector<std::pair<double, d
 }  // namespace
 
 int cmd_compare(int argc, char** argv) {
-  std::string input, out_dir, budgets_s, estimates_s = "relative,shadow,curvature,length,probe", report;
+  std::string input, out_dir, budgets_s, estimates_s = "relative,shadow,curvature,length,probe,root", report;
   std::vector<std::string> light_specs;
   TransferOptions topt;
   double crease = 60;
@@ -154,7 +154,7 @@ int cmd_compare(int argc, char** argv) {
   args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required)", &budgets_s);
   args.option("--output", "DIR", "output directory (required; created)", &out_dir);
   args.alias("-o", "--output");
-  args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe]", &estimates_s);
+  args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe,root]", &estimates_s);
   args.option("--max-levels", "K", "uniform levels to try, up to the largest budget", &max_levels, 1, 8);
   args.option("--order", "N", "SH order", &topt.order, 1, kMaxShOrder);
   args.option("--rays", "R", "rays per vertex", &topt.rays, 1, 1 << 20);

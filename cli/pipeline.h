@@ -23,7 +23,7 @@ struct BakeSettings {
   TransferOptions transfer;
   std::string refine = "none";  //!< none, adaptive or uniform
   size_t budget = 0;            //!< adaptive: output triangles
-  EdgeEstimate estimate = EdgeEstimate::Probe;
+  EdgeEstimate estimate = EdgeEstimate::Root;
   double max_edge = 0;          //!< adaptive: pre-refine edges longer than this
   size_t batch = 256;           //!< adaptive: faces popped per Embree batch
   UniformOptions uniform;       //!< uniform: levels and scheme

@@ -28,7 +28,8 @@ EdgeEstimate parse_estimate(const std::string& name) {
   if (name == "curvature") return EdgeEstimate::Curvature;
   if (name == "length") return EdgeEstimate::Length;
   if (name == "probe") return EdgeEstimate::Probe;
-  throw InputError("--estimate must be relative, shadow, curvature, length or probe, got '" + name + "'");
+  if (name == "root") return EdgeEstimate::Root;
+  throw InputError("--estimate must be relative, shadow, curvature, length, probe or root, got '" + name + "'");
 }
 
 const char* estimate_name(EdgeEstimate e) {
@@ -38,6 +39,7 @@ const char* estimate_name(EdgeEstimate e) {
     case EdgeEstimate::Curvature: return "curvature";
     case EdgeEstimate::Length: return "length";
     case EdgeEstimate::Probe: return "probe";
+    case EdgeEstimate::Root: return "root";
   }
   return "?";
 }
@@ -66,6 +68,7 @@ double TransferSignal::edge_error(const EdgeView& e) const {
     }
     case EdgeEstimate::Length:
     case EdgeEstimate::Probe: return diff * (e.pa - e.pb).norm();
+    case EdgeEstimate::Root: return diff * std::sqrt((e.pa - e.pb).norm());
   }
   return diff;
 }
@@ -95,7 +98,8 @@ namespace prtsub {
 
 void TransferSignal::probe_faces(const std::vector<FaceProbe>& faces, std::vector<double>& extra) {
   extra.clear();
-  if (options_.estimate != EdgeEstimate::Probe || faces.empty()) return;
+  const bool root = options_.estimate == EdgeEstimate::Root;
+  if ((options_.estimate != EdgeEstimate::Probe && !root) || faces.empty()) return;
   RowMatrixX3d points(static_cast<Eigen::Index>(faces.size()), 3), normals(static_cast<Eigen::Index>(faces.size()), 3);
   for (size_t i = 0; i < faces.size(); ++i) {
     points.row(static_cast<Eigen::Index>(i)) = faces[i].centroid.transpose();
@@ -114,7 +118,8 @@ void TransferSignal::probe_faces(const std::vector<FaceProbe>& faces, std::vecto
       const double d = t(static_cast<Eigen::Index>(i), k) - (f.va[k] + f.vb[k] + f.vc[k]) / 3;
       d2 += d * d;
     }
-    extra[i] = std::sqrt(d2) * std::sqrt(3 * f.area);
+    // In the unit of the edges' estimate: a length (√(3a), an equilateral edge), or its root.
+    extra[i] = std::sqrt(d2) * (root ? std::sqrt(std::sqrt(3 * f.area)) : std::sqrt(3 * f.area));
   }
 }
 

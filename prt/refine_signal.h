@@ -16,13 +16,16 @@ enum class EdgeEstimate {
   Curvature,  //!< (3) ‖Δt‖ / max(angle(n_a, n_b), θ0)
   Length,     //!< ours: ‖Δt‖ · |ab|, the edge's share of the surface integral of error
   Probe,      //!< ours: Length, plus each input face's transfer probed at its centroid
+  //! ours: Probe with ‖Δt‖ · √|ab| (the probe weighted by the face's area to the 1/4): between
+  //! Shadow's ‖Δt‖ and Length's ‖Δt‖ · |ab|, for steps that no input edge follows
+  Root,
 };
 
 EdgeEstimate parse_estimate(const std::string& name);
 const char* estimate_name(EdgeEstimate e);
 
 struct TransferSignalOptions {
-  EdgeEstimate estimate = EdgeEstimate::Probe;
+  EdgeEstimate estimate = EdgeEstimate::Root;
   double curvature_guard_deg = 10;  //!< θ0 of the curvature estimate
   TransferOptions transfer;        //!< order, rays, seed, threads of new vertices' transfer
 };

@@ -248,13 +248,14 @@ TEST_F(Cli, EvalAndCompareWriteTheirTablesAndReports) {
                           "\"reference_rays\": 128"})
     EXPECT_NE(e.find(key), std::string::npos) << key;
   const std::string csv = read_file_bytes(dir.path("cmp/nested/results.csv"));
-  // none, uniform levels 1 (328) and 2 (1312 > 700 * 5/4: not run), adaptive at 300, 328, 700 × 5
+  // none, uniform levels 1 (328) and 2 (1312 > 700 * 5/4: not run), adaptive at 300, 328, 700 × 6
   // estimates; none, uniform and the default estimate each with point and lsq values.
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 + 2 + 15 + 3);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 + 2 + 18 + 3);
   EXPECT_NE(csv.find("uniform,,point,328,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("uniform,,lsq,328,"), std::string::npos) << csv;
-  EXPECT_NE(csv.find("adaptive,probe,lsq,700,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("adaptive,root,lsq,700,"), std::string::npos) << csv;
   EXPECT_EQ(csv.find("adaptive,length,lsq"), std::string::npos) << csv;
+  EXPECT_EQ(csv.find("adaptive,probe,lsq"), std::string::npos) << csv;
   const std::string html = read_file_bytes(dir.path("cmp/nested/report.html"));
   EXPECT_NE(html.find("<svg"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);

@@ -80,6 +80,8 @@ TEST(Estimates, ClosedForms) {
   };
   EXPECT_DOUBLE_EQ(err(EdgeEstimate::Shadow, e), 5.0);
   EXPECT_DOUBLE_EQ(err(EdgeEstimate::Length, e), 10.0);
+  EXPECT_DOUBLE_EQ(err(EdgeEstimate::Probe, e), 10.0);
+  EXPECT_DOUBLE_EQ(err(EdgeEstimate::Root, e), 5.0 * std::sqrt(2.0));
   EXPECT_DOUBLE_EQ(err(EdgeEstimate::Relative, e), 5.0 / 2.5);
   EXPECT_NEAR(err(EdgeEstimate::Curvature, e), 5.0 / (M_PI / 2), 1e-12);
   EdgeView flat = e;
@@ -87,9 +89,39 @@ TEST(Estimates, ClosedForms) {
   EXPECT_NEAR(err(EdgeEstimate::Curvature, flat), 5.0 / (10 * M_PI / 180), 1e-12);  // the guard
   EdgeView same = e;
   same.vb = c;
-  for (EdgeEstimate est : {EdgeEstimate::Relative, EdgeEstimate::Shadow, EdgeEstimate::Curvature, EdgeEstimate::Length})
+  for (EdgeEstimate est : {EdgeEstimate::Relative, EdgeEstimate::Shadow, EdgeEstimate::Curvature, EdgeEstimate::Length,
+                           EdgeEstimate::Probe, EdgeEstimate::Root})
     EXPECT_EQ(err(est, same), 0.0);
+  EXPECT_EQ(parse_estimate("root"), EdgeEstimate::Root);
+  EXPECT_STREQ(estimate_name(EdgeEstimate::Root), "root");
   EXPECT_THROW(parse_estimate("best"), InputError);
+}
+
+TEST(Estimates, ProbesSeeShadowsTheCornersMissAndRootWeighsThemByAreaToTheQuarter) {
+  // A floor at z = -1 and a small occluder just above its centre, facing down: the probe at
+  // the centre is dark while the corners (all lit, value c) say nothing changes.
+  Mesh m = test::build(test::merge(test::quad(2.0, -1.0, true), test::quad(0.3, -0.9, false)));
+  RayScene scene(m.positions, position_triangles(m));
+  TransferSignalOptions o;
+  o.transfer.rays = 256;
+  const RowMatrixXd lit = unshadowed_transfer(4, Eigen::Vector3d::UnitZ()).transpose();
+  const double area = 8.0;  // each half of the 4×4 floor
+  std::vector<FaceProbe> faces{{Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitZ(), area, lit.data(), lit.data(), lit.data(), 16},
+                               {Eigen::Vector3d(1.9, 1.9, -1), Eigen::Vector3d::UnitZ(), area, lit.data(), lit.data(), lit.data(), 16}};
+  std::vector<double> probe, root;
+  o.estimate = EdgeEstimate::Probe;
+  TransferSignal(scene, o).probe_faces(faces, probe);
+  o.estimate = EdgeEstimate::Root;
+  TransferSignal(scene, o).probe_faces(faces, root);
+  ASSERT_EQ(probe.size(), 2u);
+  ASSERT_EQ(root.size(), 2u);
+  EXPECT_GT(probe[0], 0.5 * lit.norm() * std::sqrt(3 * area));  // most of the sky is blocked
+  EXPECT_LT(probe[1], 0.1 * probe[0]);                               // the far corner sees the sky
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(root[i] * std::pow(3 * area, 0.25), probe[i], 1e-12 * probe[0]);
+  o.estimate = EdgeEstimate::Length;  // no probes
+  std::vector<double> none{1.0};
+  TransferSignal(scene, o).probe_faces(faces, none);
+  EXPECT_TRUE(none.empty());
 }
 
 TEST(Eval, FlatUnoccludedSurfaceHasZeroErrorAndReferencePointsAreFixed) {
