@@ -19,13 +19,15 @@ def load(path):
 def print_scaling():
     for name, rays in (("scaling", 64), ("scaling256", 256)):
         print("\n### Refinement time at four budgets (teapot, 15,704 triangles in, %d rays per vertex)\n" % rays)
-        print("| budget | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns |")
-        print("|---:|---:|---:|---:|---:|---:|")
+        print("| budget | splits | refine s | tracing new vertices s | overhead s | overhead % | overhead / (T log2 T) ns | overhead / (splits log2 T) ns |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|")
         for T in (25000, 50000, 100000, 200000):
             r = load(os.path.join(out, "%s_%d.json" % (name, T)))
             total, traced = r["seconds_refine"], r["seconds_refine_rays"]
             over = total - traced
-            print("| %d | %.3f | %.3f | %.3f | %.1f | %.1f |" % (T, total, traced, over, 100 * over / total, 1e9 * over / (T * math.log2(T))))
+            n = r["splits"]
+            print("| %d | %d | %.3f | %.3f | %.3f | %.1f | %.1f | %.1f |" % (T, n, total, traced, over, 100 * over / total,
+                  1e9 * over / (T * math.log2(T)), 1e9 * over / (n * math.log2(T))))
 
 
 def rows(d):
