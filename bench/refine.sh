@@ -27,13 +27,6 @@ done
 bash "$here/refine_scaling.sh" "$1" "$S" "$O"
 
 # 4. Batch size: time and error at 64x the input on two contact-shadow scenes.
-for f in "$S/house_on_site.obj" "$O/scenes/spot_on_ground.obj"; do
-  n=$(basename "${f%.*}"); F=$(triangles "$f")
-  for b in 16 64 256 1024 4096; do
-    "$B" bake "$f" -o "$O/${n}_b$b.ply" --refine adaptive --budget $((64 * F)) --rays 64 --batch $b \
-      --report "$O/batch_${n}_$b.json" > /dev/null
-    "$B" eval "$O/${n}_b$b.ply" --source "$f" --points 20000 --report "$O/batch_eval_${n}_$b.json" > /dev/null
-  done
-done
+bash "$here/batch.sh" "$1" "$S" "$O/scenes" "$O"
 rm -f "$O/count.ply" "$O/count.json"
 echo "done: python3 bench/summarize.py $O"

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Prints the Markdown tables of BENCHMARKS.md (issue 4) from the outputs of bench/refine.sh.
-usage: summarize.py OUT_DIR [--scaling-only | --estimates-only]   (--scaling-only: bench/refine_scaling.sh's tables)"""
+usage: summarize.py OUT_DIR [--scaling-only | --estimates-only | --batch-only]   (--scaling-only: bench/refine_scaling.sh's tables)"""
 import json
 import math
 import os
@@ -9,6 +9,7 @@ import sys
 out = sys.argv[1]
 scaling_only = "--scaling-only" in sys.argv[2:]
 estimates_only = "--estimates-only" in sys.argv[2:]
+batch_only = "--batch-only" in sys.argv[2:]
 
 
 def load(path):
@@ -30,12 +31,26 @@ def print_scaling():
                   1e9 * over / (T * math.log2(T)), 1e9 * over / (n * math.log2(T))))
 
 
+def print_batch():
+    print("\n### Batch size (64x the input, 64 rays per vertex)\n")
+    print("| scene | batch | refine s | tracing s | batches | RMS % |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for n in ("house_on_site", "spot_on_ground"):
+        for b in (16, 64, 256, 1024, 4096):
+            r = load(os.path.join(out, "batch_%s_%d.json" % (n, b)))
+            e = load(os.path.join(out, "batch_eval_%s_%d.json" % (n, b)))
+            print("| %s | %d | %.3f | %.3f | %d | %.3f |" % (n, b, r["seconds_refine"], r["seconds_refine_rays"], r["batches"], e["rms_percent"]))
+
+
 def rows(d):
     return load(os.path.join(d, "results.json"))["runs"]
 
 
 if scaling_only:
     print_scaling()
+    sys.exit(0)
+if batch_only:
+    print_batch()
     sys.exit(0)
 
 
@@ -90,11 +105,4 @@ for scene in sorted(os.listdir(tdir)):
 
 print_scaling()
 
-print("\n### Batch size (64x the input, 64 rays per vertex)\n")
-print("| scene | batch | refine s | tracing s | batches | RMS % |")
-print("|---|---:|---:|---:|---:|---:|")
-for n in ("house_on_site", "spot_on_ground"):
-    for b in (16, 64, 256, 1024, 4096):
-        r = load(os.path.join(out, "batch_%s_%d.json" % (n, b)))
-        e = load(os.path.join(out, "batch_eval_%s_%d.json" % (n, b)))
-        print("| %s | %d | %.3f | %.3f | %d | %.3f |" % (n, b, r["seconds_refine"], r["seconds_refine_rays"], r["batches"], e["rms_percent"]))
+print_batch()
