@@ -91,7 +91,7 @@ if estimates_only:
     sys.exit(0)
 
 print("\n### Targets: uniform level 3 against adaptive at the same count\n")
-print("| scene | triangles | uniform RMS % | adaptive (length) RMS % | ratio | adaptive (probe) RMS % | ratio | best estimate | its ratio | noise floor % |")
+print("| scene | triangles | uniform RMS % | adaptive (length) RMS % | ratio | adaptive (root, the default) RMS % | ratio | best estimate | its ratio | noise floor % |")
 print("|---|---:|---:|---:|---:|---:|---:|---|---:|---:|")
 tdir = os.path.join(out, "targets")
 for scene in sorted(os.listdir(tdir)):
@@ -101,7 +101,7 @@ for scene in sorted(os.listdir(tdir)):
     ad = {r["estimate"]: r["rms_percent"] for r in rs if r["method"] == "adaptive" and r["triangles"] == u3["triangles"]}
     best = min(ad, key=ad.get)
     print("| %s | %d | %.3f | %.3f | %.2f | %.3f | %.2f | %s | %.2f | %.3f |" % (scene, u3["triangles"], u3["rms_percent"], ad["length"],
-          ad["length"] / u3["rms_percent"], ad["probe"], ad["probe"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
+          ad["length"] / u3["rms_percent"], ad["root"], ad["root"] / u3["rms_percent"], best, ad[best] / u3["rms_percent"], j["noise_floor_percent"]))
 
 print_scaling()
 
