@@ -9,9 +9,7 @@
 // then over blocks in order: the result is the same for any number of threads.
 #include "prt/block_cg.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
+#include "prt/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -24,18 +22,16 @@ constexpr Eigen::Index kBlockRows = 1024;
 
 struct Blocks {
   Eigen::Index n, K, count;
-  tbb::task_arena* arena;
+  int threads;
   std::vector<double> partial;  // count by K
 
   // body(first, last, partial row) for each block in parallel, then the column sums in order.
   template <class Body>
   std::vector<double> run(Body&& body) {
     std::fill(partial.begin(), partial.end(), 0.0);
-    arena->execute([&] {
-      tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, count, 1), [&](const tbb::blocked_range<Eigen::Index>& r) {
-        for (Eigen::Index b = r.begin(); b < r.end(); ++b)
-          body(b * kBlockRows, std::min(n, (b + 1) * kBlockRows), partial.data() + b * K);
-      });
+    parallel_range(count, threads, Eigen::Index(1), [&](const tbb::blocked_range<Eigen::Index>& r) {
+      for (Eigen::Index b = r.begin(); b < r.end(); ++b)
+        body(b * kBlockRows, std::min(n, (b + 1) * kBlockRows), partial.data() + b * K);
     });
     std::vector<double> sum(static_cast<size_t>(K), 0.0);
     for (Eigen::Index b = 0; b < count; ++b)
@@ -72,8 +68,7 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B,
     result.converged = true;
     return result;
   }
-  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
-  Blocks blocks{n, K, (n + kBlockRows - 1) / kBlockRows, &arena, {}};
+  Blocks blocks{n, K, (n + kBlockRows - 1) / kBlockRows, o.threads, {}};
   blocks.partial.resize(size_t(blocks.count * K));
   RowMatrixXd P(n, K), Y(n, K);
 

@@ -36,9 +36,6 @@
 #include "prt/fit.h"
 
 #include <Eigen/CholmodSupport>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -46,6 +43,7 @@
 #include <cmath>
 
 #include "prt/block_cg.h"
+#include "prt/parallel.h"
 #include "subdiv/exceptions.h"
 
 namespace prtsub {
@@ -261,18 +259,15 @@ RowSparseMatrixd system_pattern(const Mesh& mesh, const std::vector<Eigen::Index
       col[size_t(end[size_t(u)]++)] = static_cast<int>(v);
       col[size_t(end[size_t(v)]++)] = static_cast<int>(u);
     }
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, 512), [&](const tbb::blocked_range<Eigen::Index>& r) {
-      for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
-        int* first = col.data() + start[size_t(i)];
-        int* last = col.data() + end[size_t(i)];
-        std::sort(first, last);
-        last = std::unique(first, last);
-        if (first < last && *first < 0) last = std::move(first + 1, last, first);  // the fixed vertices' -1
-        end[size_t(i)] = last - first;
-      }
-    });
+  parallel_range(n, threads, Eigen::Index(512), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
+      int* first = col.data() + start[size_t(i)];
+      int* last = col.data() + end[size_t(i)];
+      std::sort(first, last);
+      last = std::unique(first, last);
+      if (first < last && *first < 0) last = std::move(first + 1, last, first);  // the fixed vertices' -1
+      end[size_t(i)] = last - first;
+    }
   });
   RowSparseMatrixd m(n, n);
   Eigen::Index nnz = 0;
@@ -538,7 +533,7 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     }
     if (!ok) throw SolverError("fit: the least-squares system could not be factorised even when pulled towards the point samples");
     if (o.mass == MassMatrix::Sampled && static_cast<double>(s.size()) < 8.0 * static_cast<double>(mesh.num_faces()))
-      stats.warning += std::string(stats.warning.empty() ? "" : " ") + "fit: the sampled mass matrix with under 8 samples per triangle extrapolates vertices that samples barely "
+      stats.warning = "fit: the sampled mass matrix with under 8 samples per triangle extrapolates vertices that samples barely "
                       "see; errors can be far above point sampling (docs/fit.md). Prefer --mass analytic.";
     if (stats.stabilizer > 0) {
       char buf[256];

@@ -11,15 +11,12 @@
 // estimator as the bake.
 #include "prt/render.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include "prt/image_io.h"
+#include "prt/parallel.h"
 #include "subdiv/exceptions.h"
 
 namespace prtsub {
@@ -110,25 +107,22 @@ SurfaceHits trace_primary(const RayScene& scene, const Camera& cam, int W, int H
   hits.u.assign(n, 0.f);
   hits.v.assign(n, 0.f);
   const Eigen::Vector3f origin = scene.to_local(cam.eye);
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
-      RTCIntersectContext ctx;
-      rtcInitIntersectContext(&ctx);
-      for (int r = rows.begin(); r != rows.end(); ++r)
-        for (int c = 0; c < W; ++c) {
-          RTCRayHit rh;
-          init_occlusion_ray(rh.ray, origin, camera_ray(cam, c, r, W, H).cast<float>());
-          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-          rtcIntersect1(scene.handle(), &ctx, &rh);
-          if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-          const size_t i = static_cast<size_t>(r) * W + c;
-          hits.face[i] = static_cast<int32_t>(rh.hit.primID);
-          hits.u[i] = rh.hit.u;
-          hits.v[i] = rh.hit.v;
-        }
-    });
+  parallel_range(H, threads, 4, [&](const tbb::blocked_range<int>& rows) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (int r = rows.begin(); r != rows.end(); ++r)
+      for (int c = 0; c < W; ++c) {
+        RTCRayHit rh;
+        init_occlusion_ray(rh.ray, origin, camera_ray(cam, c, r, W, H).cast<float>());
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene.handle(), &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        const size_t i = static_cast<size_t>(r) * W + c;
+        hits.face[i] = static_cast<int32_t>(rh.hit.primID);
+        hits.u[i] = rh.hit.u;
+        hits.v[i] = rh.hit.v;
+      }
   });
   scene.check("tracing primary rays");
   return hits;

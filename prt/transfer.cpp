@@ -25,10 +25,6 @@
 // moments and never stores per-sample transfer. A group is traced by one thread, in order.
 #include "prt/transfer.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -37,6 +33,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "prt/parallel.h"
 #include "prt/sampling.h"
 #include "prt/sh.h"
 #include "subdiv/exceptions.h"
@@ -79,14 +76,6 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
 }
 
 inline bool occluded(const RTCRay& r) { return r.tfar == -std::numeric_limits<float>::infinity(); }
-
-template <class Body>
-void parallel_points(Eigen::Index count, int threads, Eigen::Index grain, Body&& body) {
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, count, grain), body);
-  });
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -156,7 +145,7 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
   const Eigen::Index P = points.rows();
   RowMatrixXd out(P, sh_count(opt.order));
   auto t0 = std::chrono::steady_clock::now();
-  parallel_points(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  parallel_range(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i)
       point_transfer(scene, points, normals, offsets, i, opt, buf, out.row(i).data());
@@ -179,7 +168,7 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
   // About kGrain points per task, whatever the groups' sizes.
   const Eigen::Index grain = std::max<Eigen::Index>(1, G > 0 ? kGrain * G / std::max<Eigen::Index>(P, 1) : 1);
   auto t0 = std::chrono::steady_clock::now();
-  parallel_points(G, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  parallel_range(G, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     thread_local std::vector<double> values;
     size_t done = 0;
@@ -202,7 +191,7 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
   check_transfer_options(opt);
   std::atomic<uint64_t> hits{0};
   auto t0 = std::chrono::steady_clock::now();
-  parallel_points(points.rows(), opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  parallel_range(points.rows(), opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     uint64_t local = 0;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
