@@ -53,6 +53,19 @@ void ArgParser::option(const std::string& name, const std::string& metavar, cons
                       }});
 }
 
+void ArgParser::option(const std::string& name, const std::string& metavar, const std::string& help, size_t* out, size_t lo, size_t hi) {
+  options_.push_back({name, metavar, help + " [" + std::to_string(lo) + ".." + std::to_string(hi) + ", default " + std::to_string(*out) + "]",
+                      [name, out, lo, hi](const std::string& v) {
+                        unsigned long long x = 0;
+                        auto r = std::from_chars(v.data(), v.data() + v.size(), x);
+                        if (r.ec != std::errc() || r.ptr != v.data() + v.size())
+                          throw UsageError(name + ": expected a non-negative integer, got '" + v + "'");
+                        if (x < lo || x > hi)
+                          throw UsageError(name + ": must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + v);
+                        *out = static_cast<size_t>(x);
+                      }});
+}
+
 void ArgParser::option(const std::string& name, const std::string& metavar, const std::string& help, double* out, double lo, double hi) {
   std::ostringstream range;
   range << " [" << lo << ".." << hi << ", default " << *out << "]";

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "subdiv/exceptions.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 
@@ -28,9 +28,25 @@ class ArgParser {
   void option(const std::string& name, const std::string& metavar, const std::string& help, std::string* out);
   void option(const std::string& name, const std::string& metavar, const std::string& help, int* out, int lo, int hi);
   void option(const std::string& name, const std::string& metavar, const std::string& help, uint64_t* out);
+  void option(const std::string& name, const std::string& metavar, const std::string& help, size_t* out, size_t lo, size_t hi);
   void option(const std::string& name, const std::string& metavar, const std::string& help, double* out, double lo, double hi);
   //! A repeatable option: every occurrence is appended.
   void option(const std::string& name, const std::string& metavar, const std::string& help, std::vector<std::string>* out);
+  //! One of an enum's values by name; the default shown is *out's. A name not in `values` is a
+  //! UsageError listing the names.
+  template <class E>
+  void choice(const std::string& name, const std::string& help, E* out, std::vector<E> values, const char* (*name_of)(E)) {
+    std::string metavar, list;
+    for (E v : values) metavar += (metavar.empty() ? "" : "|") + std::string(name_of(v)), list += (list.empty() ? "" : ", ") + std::string(name_of(v));
+    options_.push_back({name, metavar, help + " [default " + name_of(*out) + "]", [=](const std::string& v) {
+                          for (E e : values)
+                            if (v == name_of(e)) {
+                              *out = e;
+                              return;
+                            }
+                          throw UsageError(name + ": unknown value '" + v + "' (" + list + ")");
+                        }});
+  }
   //! An option without a value.
   void flag(const std::string& name, const std::string& help, bool* out);
   //! A short alias such as -o for an option already declared.

@@ -3,9 +3,8 @@
 // rays), so their errors differ only by where their vertices are. Uniform levels run at their
 // own triangle counts; adaptive runs at exactly those counts and at the requested budgets.
 // The page is self-contained: inline SVG plots and PNG frames as data URIs.
-#include "cli/compare.h"
+#include "cli/commands.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,16 +13,17 @@
 #include <sstream>
 
 #include "cli/args.h"
-#include "cli/bake_options.h"
-#include "cli/pipeline.h"
+#include "cli/options.h"
+#include "cli/specs.h"
 #include "cli/report.h"
-#include "prt/evaluate.h"
-#include "prt/image_io.h"
-#include "prt/lights.h"
-#include "prt/render.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
-#include "subdiv/ply.h"
+#include "prtsub/prt/evaluate.h"
+#include "prtsub/prt/image_io.h"
+#include "prtsub/prt/lights.h"
+#include "prtsub/prt/render.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/ply.h"
+#include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
 namespace {
@@ -137,140 +137,72 @@ std::string svg_plot(const std::map<std::string, std::vector<std::pair<double, d
   return o.str();
 }
 
-}  // namespace
+struct CompareCli {
+  BakeCli bake;
+  std::string out_dir, budgets = "", estimates = "relative,shadow,curvature,length,probe,root", frame_size = "480,360";
+  std::vector<std::string> lights;
+  int max_levels = 4, eval_points = 20000, frame_rays = 256;
+};
 
-int cmd_compare(int argc, char** argv) {
-  std::string input, out_dir, budgets_s, estimates_s = "relative,shadow,curvature,length,probe,root", report;
-  std::vector<std::string> light_specs;
-  TransferOptions topt;
-  double crease = 60;
-  int max_levels = 4, eval_points = 20000, frame_rays = 256, batch = 256;
-  std::string frame_size = "480,360";
-  ArgParser args("compare",
-                 "Bakes INPUT with uniform refinement (OpenSubdiv, linear) and with adaptive refinement under every\n"
-                 "estimate, evaluates each against one reference, and writes DIR/results.csv, DIR/results.json and\n"
-                 "DIR/report.html (table, log-log plots of error against triangles and against time, relit frames).");
-  args.positional("INPUT", "mesh file", &input);
-  args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required)", &budgets_s);
-  args.option("--output", "DIR", "output directory (required; created)", &out_dir);
-  args.alias("-o", "--output");
-  args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe,root]", &estimates_s);
-  args.option("--max-levels", "K", "uniform levels to try, up to the largest budget", &max_levels, 1, 8);
-  args.option("--order", "N", "SH order", &topt.order, 1, kMaxShOrder);
-  args.option("--rays", "R", "rays per vertex", &topt.rays, 1, 1 << 20);
-  args.option("--seed", "S", "random seed", &topt.seed);
-  args.option("--threads", "T", "worker threads, 0 for every core", &topt.threads, 0, 1024);
-  args.option("--crease-angle", "DEG", "computed normals' crease angle", &crease, 0.0, 180.0);
-  args.option("--batch", "B", "adaptive: faces per Embree batch", &batch, 1, 1 << 20);
-  args.option("--eval-points", "N", "reference points", &eval_points, 100, 10000000);
-  args.option("--light", "SPEC", "light of the frames [default sky and sun:1,3,2]", &light_specs);
-  args.option("--frame-size", "W,H", "frame size [default 480,360]", &frame_size);
-  args.option("--frame-rays", "R", "rays per pixel of the reference frame", &frame_rays, 1, 1 << 20);
-  args.option("--report", "R.json", "also write a flat JSON summary", &report);
-  FitCli fit_cli;
-  fit_cli.add(args);
-  if (!args.parse(argc, argv, 2)) return 0;
-  if (budgets_s.empty()) throw UsageError("compare: missing --budgets T1,T2,...");
-  if (out_dir.empty()) throw UsageError("compare: missing -o DIR");
-  const std::vector<size_t> budgets = parse_budgets(budgets_s);
-  std::vector<EdgeEstimate> estimates;
-  for (const std::string& e : split(estimates_s)) estimates.push_back(parse_estimate(e));
-  if (light_specs.empty()) light_specs = {"sky", "sun:1,3,2"};
-  int fw = 0, fh = 0;
-  parse_size(frame_size, "--frame-size", fw, fh);
-  {
-    std::error_code ec;
-    std::filesystem::create_directories(out_dir, ec);
-    if (ec) throw IoError(out_dir + ": cannot create directory (" + ec.message() + ")");
-  }
-  check_writable(out_dir + "/results.csv");
-  if (!report.empty()) check_writable(report);
-
-  const auto start = std::chrono::steady_clock::now();
-  Mesh source = load_mesh(input, LoadOptions{crease});
-  RayScene source_scene(source.positions, position_triangles(source));
-  ReferenceOptions ro;
-  ro.points = static_cast<size_t>(eval_points);
-  ro.rays = 8 * topt.rays;
-  BakeSettings fitted;  // the fit options, applied to every run that fits
-  fitted.transfer = topt;
-  fit_cli.apply(fitted);
-  topt.order = fitted.transfer.order;  // 1 for AO
-  ro.order = topt.order;
-  ro.threads = topt.threads;
-  std::printf("prtsub compare: %s (%zu triangles), order %d, %d rays; reference %zu points x %d rays\n", input.c_str(),
-              source.num_faces(), topt.order, topt.rays, ro.points, ro.rays);
-  std::fflush(stdout);
-  Reference ref = make_reference(source, source_scene, ro);
-  std::printf("  reference noise floor %.3f%%\n", 100 * ref.noise_floor);
-
-  // The plan: the unrefined input, uniform levels up to the largest budget, adaptive at every
-  // uniform count and every budget, under every estimate.
+// The plan: the unrefined input, uniform levels up to the largest budget, adaptive at every
+// uniform count and every budget, under every estimate. Returns the runs and the triangle
+// count the frames are shown at (uniform level 3, or the first budget).
+std::vector<BakeOptions> plan_runs(const BakeOptions& base, size_t source_faces, const std::vector<size_t>& budgets,
+                                   const std::vector<EdgeEstimate>& estimates, int max_levels, size_t& frame_count) {
   const size_t largest = *std::max_element(budgets.begin(), budgets.end());
-  std::vector<BakeSettings> plan;
-  BakeSettings base;
-  base.input = input, base.load = LoadOptions{crease}, base.transfer = topt, base.batch = static_cast<size_t>(batch);
-  base.signal = fitted.signal, base.fit = fitted.fit, base.samples = fitted.samples, base.sample_rays = fitted.sample_rays;
-  plan.push_back(base);
+  std::vector<BakeOptions> plan{base};
   std::vector<size_t> counts = budgets;
+  frame_count = 0;
   for (int k = 1; k <= max_levels; ++k) {
-    const size_t count = source.num_faces() << (2 * k);
+    const size_t count = source_faces << (2 * k);
     if (count > largest * 5 / 4) break;
-    BakeSettings u = base;
-    u.refine = "uniform", u.uniform.levels = k, u.uniform.crease_angle_deg = crease;
+    BakeOptions u = base;
+    u.refine = Refinement::Uniform, u.uniform.levels = k;
     plan.push_back(u);
     counts.push_back(count);
+    if (k == std::min(3, max_levels)) frame_count = count;
   }
+  if (frame_count == 0) frame_count = budgets.front();
   std::sort(counts.begin(), counts.end());
   counts.erase(std::unique(counts.begin(), counts.end()), counts.end());
   for (size_t count : counts)
     for (EdgeEstimate e : estimates) {
-      if (count <= source.num_faces()) continue;
-      BakeSettings a = base;
-      a.refine = "adaptive", a.budget = count, a.estimate = e;
+      if (count <= source_faces) continue;
+      BakeOptions a = base;
+      a.refine = Refinement::Adaptive, a.adaptive.budget = count, a.estimate = e;
       // The fit joins the default estimate's runs; the others compare estimates, point-sampled.
-      if (e != BakeSettings{}.estimate) a.fit.method = FitMethod::Point;
+      if (e != BakeOptions{}.estimate) a.fit.method = FitMethod::Point;
       plan.push_back(a);
     }
+  return plan;
+}
 
+// A fitted run also carries its point-sampled values: two rows from one bake, the point row
+// timed without the samples and the fit.
+std::vector<Row> evaluate_run(const BakeOptions& s, const BakeResult& r, const Reference& ref) {
+  std::vector<std::pair<std::string, const RowMatrixXd*>> values = {{"point", &r.point}};
+  if (s.fit.method != FitMethod::Point) values.push_back({fit_method_name(s.fit.method), &r.transfer});
   std::vector<Row> rows;
-  std::map<std::string, BakeResult> keep;  // runs whose frames the page shows
-  size_t frame_count = 0;
-  for (size_t k = 1; k < plan.size(); ++k)
-    if (plan[k].refine == "uniform" && plan[k].uniform.levels == std::min(3, max_levels)) frame_count = source.num_faces() << (2 * plan[k].uniform.levels);
-  if (frame_count == 0 || frame_count > largest * 5 / 4) frame_count = budgets.front();
-  for (size_t i = 0; i < plan.size(); ++i) {
-    const BakeSettings& s = plan[i];
-    BakeResult r = run_bake(s);
-    // A fitted run also carries its point-sampled values: two rows from one bake, the point row
-    // timed without the samples and the fit.
-    std::vector<std::pair<std::string, const RowMatrixXd*>> values = {{"point", &r.point}};
-    if (s.fit.method != FitMethod::Point) values.push_back({fit_method_name(s.fit.method), &r.transfer});
-    for (const auto& [fit, v] : values) {
-      EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, *v);
-      Row row;
-      row.method = s.refine;
-      row.estimate = s.refine == "adaptive" ? estimate_name(s.estimate) : "";
-      row.fit = fit;
-      row.triangles = r.mesh.num_faces();
-      row.vertices = r.mesh.num_vertices();
-      row.rms = e.rms_percent, row.p95 = e.p95_percent;
-      row.seconds = fit == "point" ? r.seconds_total - r.seconds_samples - r.seconds_fit : r.seconds_total;
-      rows.push_back(row);
-      std::printf("  [%zu/%zu] %-8s %-9s %-7s %8zu triangles: RMS %7.3f%%  p95 %7.3f%%  %.2f s\n", i + 1, plan.size(),
-                  row.method.c_str(), row.estimate.c_str(), row.fit.c_str(), row.triangles, row.rms, row.p95, row.seconds);
-      std::fflush(stdout);
-    }
-    if (r.mesh.num_faces() == frame_count && (s.refine == "uniform" || s.estimate == BakeSettings{}.estimate)) {
-      const std::string key = s.refine == "uniform" ? "uniform" : std::string("adaptive ") + estimate_name(s.estimate);
-      keep.emplace(key, std::move(r));
-    }
+  for (const auto& [fit, v] : values) {
+    const EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, *v);
+    Row row;
+    row.method = refinement_name(s.refine);
+    row.estimate = s.refine == Refinement::Adaptive ? estimate_name(s.estimate) : "";
+    row.fit = fit;
+    row.triangles = r.mesh.num_faces();
+    row.vertices = r.mesh.num_vertices();
+    row.rms = e.rms_percent, row.p95 = e.p95_percent;
+    row.seconds = fit == "point" ? r.seconds_total - r.seconds_samples - r.seconds_fit : r.seconds_total;
+    rows.push_back(row);
   }
+  return rows;
+}
 
-  // Tables.
+void write_tables(const std::string& dir, const std::string& input, const BakeOptions& base, const Reference& ref,
+                  const std::vector<Row>& rows) {
   std::ostringstream csv, json;
   csv << "method,estimate,fit,triangles,vertices,rms_percent,p95_percent,seconds\n";
-  json << "{\n  \"input\": \"" << input << "\",\n  \"order\": " << topt.order << ",\n  \"rays\": " << topt.rays
+  json << "{\n  \"input\": \"" << input << "\",\n  \"order\": " << base.transfer.order << ",\n  \"rays\": " << base.transfer.rays
        << ",\n  \"reference_points\": " << ref.points.rows() << ",\n  \"reference_rays\": " << ref.rays
        << ",\n  \"noise_floor_percent\": " << fmt(100 * ref.noise_floor, 6) << ",\n  \"runs\": [\n";
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -283,66 +215,68 @@ int cmd_compare(int argc, char** argv) {
          << (i + 1 < rows.size() ? ",\n" : "\n");
   }
   json << "  ]\n}\n";
-  write_file_atomically(out_dir + "/results.csv", csv.str());
-  write_file_atomically(out_dir + "/results.json", json.str());
+  write_file_atomically(dir + "/results.csv", csv.str());
+  write_file_atomically(dir + "/results.json", json.str());
+}
 
-  // Frames at the uniform level-3 count (or the first budget): uniform, adaptive, reference.
-  std::map<std::string, std::string> images;  // caption -> PNG bytes
-  std::string frame_note;
-  if (!keep.empty()) {
-    ShLight light = parse_light(light_specs[0], topt.order);
-    for (size_t i = 1; i < light_specs.size(); ++i) light += parse_light(light_specs[i], topt.order);
-    const Camera cam = auto_camera(bounds(source.positions), fw, fh);
-    const RowMatrixX3d src_corners = vertex_positions(source);
-    SurfaceHits ref_hits = trace_primary(source_scene, cam, fw, fh, topt.threads);
-    TransferOptions fo = topt;
-    fo.rays = frame_rays;
-    Image reference = render_reference(source_scene, ref_hits, src_corners, source.normals, source.triangles, light, 0.8, fo);
-    write_image(out_dir + "/frame_reference.png", reference);
-    images["per-pixel reference"] = read_file_bytes(out_dir + "/frame_reference.png");
-    for (auto& [name, r] : keep) {
-      const RowMatrixX3d corners = vertex_positions(r.mesh);
-      RayScene scene(corners, r.mesh.triangles);
-      SurfaceHits hits = trace_primary(scene, cam, fw, fh, topt.threads);
-      const bool fitted_run = (r.point - r.transfer).cwiseAbs().maxCoeff() > 0;
-      for (const bool use_fit : {false, true}) {
-        if (use_fit && !fitted_run) continue;
-        const std::string label = name + (use_fit ? ", " + std::string(fit_method_name(base.fit.method)) : ", point");
-        Image frame = shade_gouraud(hits, r.mesh.triangles, vertex_radiance(use_fit ? r.transfer : r.point, light, 0.8));
-        Image heat;
-        ImageError err = image_error(frame, reference, &heat);
-        std::string file = std::string(name == "uniform" ? "frame_uniform" : "frame_adaptive") + (use_fit ? "_fit" : "_point");
-        write_image(out_dir + "/" + file + ".png", frame);
-        write_image(out_dir + "/" + file + "_error.png", heat);
-        images[label + " (" + std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%)"] =
-            read_file_bytes(out_dir + "/" + file + ".png");
-        images["error of " + label] = read_file_bytes(out_dir + "/" + file + "_error.png");
-      }
+// Frames at the frame count: the per-pixel reference, then each kept run with point and (if it
+// fitted) fitted values, each with its heat map. Returns caption -> PNG bytes.
+std::map<std::string, std::string> render_frames(const CompareCli& c, const BakeOptions& base, const Mesh& source,
+                                                 const RayScene& source_scene, const std::map<std::string, BakeResult>& keep) {
+  std::map<std::string, std::string> images;
+  int fw = 0, fh = 0;
+  parse_size(c.frame_size, "--frame-size", fw, fh);
+  const ShLight light = parse_lights(c.lights, base.transfer.order);
+  const Camera cam = auto_camera(bounds(source.positions), fw, fh);
+  const SurfaceHits ref_hits = trace_primary(source_scene, cam, fw, fh, base.transfer.threads);
+  TransferOptions fo = base.transfer;
+  fo.rays = c.frame_rays;
+  const Image reference = render_reference(source_scene, ref_hits, vertex_positions(source), source.normals, source.triangles, light, 0.8, fo);
+  write_image(c.out_dir + "/frame_reference.png", reference);
+  images["per-pixel reference"] = read_file_bytes(c.out_dir + "/frame_reference.png");
+  for (const auto& [name, r] : keep) {
+    const RayScene scene(vertex_positions(r.mesh), r.mesh.triangles);
+    const SurfaceHits hits = trace_primary(scene, cam, fw, fh, base.transfer.threads);
+    const bool fitted_run = (r.point - r.transfer).cwiseAbs().maxCoeff() > 0;
+    for (const bool use_fit : {false, true}) {
+      if (use_fit && !fitted_run) continue;
+      const std::string label = name + (use_fit ? ", " + std::string(fit_method_name(base.fit.method)) : ", point");
+      const Image frame = shade_gouraud(hits, r.mesh.triangles, vertex_radiance(use_fit ? r.transfer : r.point, light, 0.8));
+      Image heat;
+      const ImageError err = image_error(frame, reference, &heat);
+      const std::string file = std::string(name == "uniform" ? "frame_uniform" : "frame_adaptive") + (use_fit ? "_fit" : "_point");
+      write_image(c.out_dir + "/" + file + ".png", frame);
+      write_image(c.out_dir + "/" + file + "_error.png", heat);
+      images[label + " (" + std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%)"] =
+          read_file_bytes(c.out_dir + "/" + file + ".png");
+      images["error of " + label] = read_file_bytes(c.out_dir + "/" + file + "_error.png");
     }
-    frame_note = "Frames at " + std::to_string(frame_count) + " triangles under " + light_specs[0] +
-                 (light_specs.size() > 1 ? " + " + light_specs[1] : "") + "; the reference computes transfer at every pixel (" +
-                 std::to_string(frame_rays) + " rays). Heat maps: black none, yellow 4x the frame's RMSE or more.";
   }
+  return images;
+}
 
-  // The page.
+void write_page(const CompareCli& c, const BakeOptions& base, size_t source_faces, const Reference& ref, const std::vector<Row>& rows,
+                const std::map<std::string, std::string>& images, size_t frame_count) {
   std::map<std::string, std::vector<std::pair<double, double>>> by_tri, by_time;
   for (const Row& r : rows) {
-    std::string name = (r.method == "adaptive" ? "adaptive " + r.estimate : r.method) + (r.fit == "point" ? "" : " " + r.fit);
     if (r.method == "none") continue;
+    const std::string name = (r.method == "adaptive" ? "adaptive " + r.estimate : r.method) + (r.fit == "point" ? "" : " " + r.fit);
     by_tri[name].push_back({double(r.triangles), r.rms});
     by_time[name].push_back({r.seconds, r.rms});
   }
+  const std::string& input = c.bake.input;
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset='utf-8'><title>prtsub compare: " << input << "</title>"
        << "<style>body{font-family:sans-serif;margin:24px;color:#222}table{border-collapse:collapse}td,th{padding:3px 10px;"
           "border-bottom:1px solid #ddd;text-align:right}th{background:#f4f4f4}td:first-child,td:nth-child(2){text-align:left}"
           "figure{display:inline-block;margin:6px}figcaption{font-size:12px;max-width:480px}</style></head><body>";
-  html << "<h1>Uniform against adaptive refinement</h1><p>Input <code>" << input << "</code>, " << source.num_faces()
-       << " triangles. Order " << topt.order << ", " << topt.rays << " rays per vertex, seed " << topt.seed
+  html << "<h1>Uniform against adaptive refinement</h1><p>Input <code>" << input << "</code>, " << source_faces
+       << " triangles. Order " << base.transfer.order << ", " << base.transfer.rays << " rays per vertex, seed " << base.transfer.seed
        << ". Error: surface RMS of ‖g − t<sub>ref</sub>‖ / ‖t<sub>unshadowed</sub>‖ at " << ref.points.rows()
        << " seeded area-stratified points, reference " << ref.rays << " rays (its own noise floor " << fmt(100 * ref.noise_floor, 3)
        << "%). Vertex values: point sampled, and for uniform and the default estimate also "
-       << fit_method_name(base.fit.method) << (base.fit.method == FitMethod::LeastSquares ? " (alpha " + fmt(base.fit.alpha, 3) + ", " + regularizer_name(base.fit.regularizer) + " regulariser)" : std::string())
+       << fit_method_name(base.fit.method)
+       << (base.fit.method == FitMethod::LeastSquares ? " (alpha " + fmt(base.fit.alpha, 3) + ", " + regularizer_name(base.fit.regularizer) + " regulariser)" : std::string())
        << " from " << fmt(base.samples.per_triangle, 3) << " surface samples per triangle with " << base.sample_rays
        << " rays each; a fitted run's time includes its samples and solve.</p>";
   html << "<h2>Error against triangles</h2>" << svg_plot(by_tri, "triangles", "RMS error (%)");
@@ -354,22 +288,106 @@ int cmd_compare(int argc, char** argv) {
          << r.vertices << "</td><td>" << fmt(r.rms) << "</td><td>" << fmt(r.p95) << "</td><td>" << fmt(r.seconds, 3) << "</td></tr>";
   html << "</table>";
   if (!images.empty()) {
-    html << "<h2>Relit frames</h2><p>" << frame_note << "</p>";
+    html << "<h2>Relit frames</h2><p>Frames at " << frame_count << " triangles under " << c.lights[0]
+         << (c.lights.size() > 1 ? " + " + c.lights[1] : "") << "; the reference computes transfer at every pixel ("
+         << c.frame_rays << " rays). Heat maps: black none, yellow 4x the frame's RMSE or more.</p>";
     for (const auto& [caption, png] : images)
       html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << caption << "</figcaption></figure>";
   }
   html << "<p style='font-size:12px;color:#666'>Made by <code>prtsub compare</code>; results.csv and results.json hold the same table.</p></body></html>\n";
-  write_file_atomically(out_dir + "/report.html", html.str());
-  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("  wrote %s/results.csv, results.json and report.html (%.1f s)\n", out_dir.c_str(), total);
-  if (!report.empty()) {
+  write_file_atomically(c.out_dir + "/report.html", html.str());
+}
+
+}  // namespace
+
+int cmd_compare(int argc, char** argv) {
+  CompareCli c;
+  ArgParser args("compare",
+                 "Bakes INPUT with uniform refinement (OpenSubdiv, linear) and with adaptive refinement under every\n"
+                 "estimate, evaluates each against one reference, and writes DIR/results.csv, DIR/results.json and\n"
+                 "DIR/report.html (table, log-log plots of error against triangles and against time, relit frames).");
+  c.bake.add_common(args);
+  args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required)", &c.budgets);
+  args.option("--output", "DIR", "output directory (required; created)", &c.out_dir);
+  args.alias("-o", "--output");
+  args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe,root]", &c.estimates);
+  args.option("--max-levels", "K", "uniform levels to try, up to the largest budget", &c.max_levels, 1, 8);
+  add_batch_option(args, c.bake.bake.adaptive);
+  args.option("--eval-points", "N", "reference points", &c.eval_points, 100, 10000000);
+  args.option("--light", "SPEC", "light of the frames [default sky and sun:1,3,2]", &c.lights);
+  args.option("--frame-size", "W,H", "frame size [default 480,360]", &c.frame_size);
+  args.option("--frame-rays", "R", "rays per pixel of the reference frame", &c.frame_rays, 1, 1 << 20);
+  c.bake.add_fit(args);
+  if (!args.parse(argc, argv, 2)) return 0;
+  if (c.budgets.empty()) throw UsageError("compare: missing --budgets T1,T2,...");
+  if (c.out_dir.empty()) throw UsageError("compare: missing -o DIR");
+  const std::vector<size_t> budgets = parse_budgets(c.budgets);
+  std::vector<EdgeEstimate> estimates;
+  for (const std::string& e : split(c.estimates)) {
+    try {
+      estimates.push_back(parse_estimate(e));
+    } catch (const InputError& err) {
+      throw UsageError(std::string("--estimates: ") + err.what());
+    }
+  }
+  if (c.lights.empty()) c.lights = {"sky", "sun:1,3,2"};
+  parse_lights(c.lights, 1);  // usage mistakes now, not after the runs
+  int fw = 0, fh = 0;
+  parse_size(c.frame_size, "--frame-size", fw, fh);
+  const BakeOptions base = resolve_bake_options(c.bake.options());
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(c.out_dir, ec);
+    if (ec) throw IoError(c.out_dir + ": cannot create directory (" + ec.message() + ")");
+  }
+  check_writable(c.out_dir + "/results.csv");
+  if (!c.bake.report.empty()) check_writable(c.bake.report);
+
+  const Stopwatch clock;
+  const Mesh source = load_mesh(c.bake.input, c.bake.load);
+  const RayScene source_scene(source.positions, position_triangles(source));
+  ReferenceOptions ro;
+  ro.points = static_cast<size_t>(c.eval_points);
+  ro.rays = 8 * base.transfer.rays;
+  ro.order = base.transfer.order;  // 1 for AO
+  ro.threads = base.transfer.threads;
+  std::printf("prtsub compare: %s (%zu triangles), order %d, %d rays; reference %zu points x %d rays\n", c.bake.input.c_str(),
+              source.num_faces(), base.transfer.order, base.transfer.rays, ro.points, ro.rays);
+  std::fflush(stdout);
+  const Reference ref = make_reference(source, source_scene, ro);
+  std::printf("  reference noise floor %.3f%%\n", 100 * ref.noise_floor);
+
+  size_t frame_count = 0;
+  const std::vector<BakeOptions> plan = plan_runs(base, source.num_faces(), budgets, estimates, c.max_levels, frame_count);
+  std::vector<Row> rows;
+  std::map<std::string, BakeResult> keep;  // runs whose frames the page shows
+  for (size_t i = 0; i < plan.size(); ++i) {
+    const BakeOptions& s = plan[i];
+    BakeResult r = bake(source, s);
+    for (const Row& row : evaluate_run(s, r, ref)) {
+      rows.push_back(row);
+      std::printf("  [%zu/%zu] %-8s %-9s %-7s %8zu triangles: RMS %7.3f%%  p95 %7.3f%%  %.2f s\n", i + 1, plan.size(),
+                  row.method.c_str(), row.estimate.c_str(), row.fit.c_str(), row.triangles, row.rms, row.p95, row.seconds);
+      std::fflush(stdout);
+    }
+    if (r.mesh.num_faces() == frame_count && (s.refine == Refinement::Uniform || s.estimate == BakeOptions{}.estimate)) {
+      const std::string key = s.refine == Refinement::Uniform ? "uniform" : std::string("adaptive ") + estimate_name(s.estimate);
+      keep.emplace(key, std::move(r));
+    }
+  }
+  write_tables(c.out_dir, c.bake.input, base, ref, rows);
+  const std::map<std::string, std::string> images =
+      keep.empty() ? std::map<std::string, std::string>() : render_frames(c, base, source, source_scene, keep);
+  write_page(c, base, source.num_faces(), ref, rows, images, frame_count);
+  std::printf("  wrote %s/results.csv, results.json and report.html (%.1f s)\n", c.out_dir.c_str(), clock.total());
+  if (!c.bake.report.empty()) {
     Report r;
     r.set("command", "compare");
-    r.set("input", input);
-    r.set("runs", static_cast<uint64_t>(rows.size()));
-    r.set("seconds_total", total);
+    r.set("input", c.bake.input);
+    r.set("runs", rows.size());
+    r.set("seconds_total", clock.total());
     r.set("noise_floor_percent", 100 * ref.noise_floor);
-    r.write(report);
+    r.write(c.bake.report);
   }
   return 0;
 }

@@ -9,10 +9,10 @@
 #include <cstdlib>
 #include <string>
 
-#include "prt/asset.h"
-#include "prt/image_io.h"
-#include "prt/lights.h"
-#include "prt/render.h"
+#include "prtsub/prt/asset.h"
+#include "prtsub/prt/image_io.h"
+#include "prtsub/prt/lights.h"
+#include "prtsub/prt/render.h"
 
 int main(int argc, char** argv) {
   if (argc < 3) {

@@ -1,4 +1,6 @@
-#include "prt/asset.h"
+#include "prtsub/prt/asset.h"
+
+#include <algorithm>
 
 #include <unistd.h>
 
@@ -7,9 +9,9 @@
 #include <cstring>
 #include <fstream>
 
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
-#include "subdiv/ply.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/ply.h"
 
 namespace prtsub {
 namespace {
@@ -29,6 +31,24 @@ bool host_is_little_endian() {
 }
 
 }  // namespace
+
+AssetSignal parse_asset_signal(const std::string& name) {
+  if (name == "transfer") return AssetSignal::Transfer;
+  if (name == "ao") return AssetSignal::Ao;
+  throw InputError("unknown signal '" + name + "' (transfer, ao)");
+}
+
+const char* asset_signal_name(AssetSignal s) { return s == AssetSignal::Ao ? "ao" : "transfer"; }
+
+size_t clamp_ao(RowMatrixXd& t0) {
+  const double hi = 1 / kAoPerT0;
+  size_t moved = 0;
+  for (Eigen::Index i = 0; i < t0.size(); ++i) {
+    double& v = t0.data()[i];
+    if (v < 0 || v > hi) v = std::clamp(v, 0.0, hi), ++moved;
+  }
+  return moved;
+}
 
 Metadata sh_convention_metadata(int order) {
   return {

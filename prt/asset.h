@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 
@@ -14,6 +14,8 @@ using Metadata = std::vector<std::pair<std::string, std::string>>;
 
 //! What an asset's vertices carry: SH transfer (t0..t{N²-1}) or ambient occlusion (ao).
 enum class AssetSignal { Transfer, Ao };
+AssetSignal parse_asset_signal(const std::string& name);  //!< transfer, ao \throw InputError
+const char* asset_signal_name(AssetSignal s);
 
 //! ao = t0 · 2/√π: ambient occlusion (1/π)∫V max(n·ω,0) dω is order-1 transfer over y_0 = 1/(2√π),
 //! divided by π. prtsub bakes AO as order-1 transfer and converts on writing and reading.
@@ -31,6 +33,9 @@ struct Asset {
   int order = 0;                      //!< 1 for AO assets
   AssetSignal signal = AssetSignal::Transfer;  //!< ao assets are read into transfer as t0 = ao / kAoPerT0
 };
+
+//! AO: clamps order-1 transfer into the AO range [0, 1]·(√π/2); returns how many values moved.
+size_t clamp_ao(RowMatrixXd& t0);
 
 //! The comment lines stating the SH convention, written into every transfer asset.
 Metadata sh_convention_metadata(int order);

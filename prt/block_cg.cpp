@@ -7,9 +7,9 @@
 // P = R + βP. The matrix is row-major and the vectors are row-major #n by K, so a row of A
 // reads K contiguous values per neighbour. Dot products are summed per fixed block of rows and
 // then over blocks in order: the result is the same for any number of threads.
-#include "prt/block_cg.h"
+#include "prtsub/prt/block_cg.h"
 
-#include "prt/parallel.h"
+#include "prtsub/prt/parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 
 #include <Eigen/SparseCore>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 

@@ -5,15 +5,15 @@
 // its area without clumping, and every asset baked from a source is judged on the same points.
 // Each point's transfer in the asset is found through source_face: only faces that lie in the
 // point's input triangle are candidates, so refinement of any kind can be judged.
-#include "prt/evaluate.h"
+#include "prtsub/prt/evaluate.h"
 
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
-#include "prt/sampling.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 
@@ -24,7 +24,7 @@ double unshadowed_norm(int order) {
 }
 
 Reference make_reference(const Mesh& src, const RayScene& scene, const ReferenceOptions& o) {
-  if (o.points == 0) throw InputError("eval: --points must be positive");
+  if (o.points == 0) throw InputError("reference: the point count must be positive");
   std::vector<double> cumulative(src.num_faces() + 1, 0.0);
   for (size_t f = 0; f < src.num_faces(); ++f) {
     const Triangle& t = src.triangles[f];
@@ -126,7 +126,7 @@ EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const s
     err.push_back(std::sqrt(e2) / unit);
   }
   r.points = err.size();
-  if (err.empty()) throw InputError("eval: no reference point could be located in the asset (is --source the asset's input?)");
+  if (err.empty()) throw InputError("eval: no reference point could be located in the asset (was the asset baked from this source?)");
   double s = 0;
   for (double e : err) s += e * e;
   r.rms_percent = 100 * std::sqrt(s / static_cast<double>(err.size()));

@@ -1,8 +1,8 @@
 // Surface RMS transfer error of an asset against a high-ray reference on its source surface.
 #pragma once
 
-#include "prt/asset.h"
-#include "prt/transfer.h"
+#include "prtsub/prt/asset.h"
+#include "prtsub/prt/transfer.h"
 
 namespace prtsub {
 

@@ -33,30 +33,24 @@
 // right-hand sides. If it fails or its pivot ratio falls below 1e-7 (α = 0 with the sampled
 // mass matrix, faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
 // λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed.
-#include "prt/fit.h"
+#include "prtsub/prt/fit.h"
 
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <chrono>
 #include <cmath>
 
-#include "prt/block_cg.h"
-#include "prt/parallel.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/block_cg.h"
+#include "prtsub/prt/parallel.h"
+#include "prtsub/subdiv/adjacency.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
 namespace {
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
-
-double seconds_since(std::chrono::steady_clock::time_point& t) {
-  auto now = std::chrono::steady_clock::now();
-  double s = std::chrono::duration<double>(now - t).count();
-  t = now;
-  return s;
-}
 
 struct FaceGeometry {
   Eigen::Vector3d e[3];  // e[i]: the edge opposite corner i, counter-clockwise
@@ -94,22 +88,22 @@ FitMethod parse_fit_method(const std::string& n) {
   if (n == "point") return FitMethod::Point;
   if (n == "average") return FitMethod::Average;
   if (n == "lsq") return FitMethod::LeastSquares;
-  throw InputError("--fit must be point, average or lsq, got '" + n + "'");
+  throw InputError("unknown fit method '" + n + "' (point, average, lsq)");
 }
 Regularizer parse_regularizer(const std::string& n) {
   if (n == "edge") return Regularizer::Edge;
   if (n == "gradient") return Regularizer::Gradient;
-  throw InputError("--regularizer must be edge or gradient, got '" + n + "'");
+  throw InputError("unknown regularizer '" + n + "' (edge, gradient)");
 }
 MassMatrix parse_mass_matrix(const std::string& n) {
   if (n == "analytic") return MassMatrix::Analytic;
   if (n == "sampled") return MassMatrix::Sampled;
-  throw InputError("--mass must be analytic or sampled, got '" + n + "'");
+  throw InputError("unknown mass matrix '" + n + "' (analytic, sampled)");
 }
 FitSolver parse_fit_solver(const std::string& n) {
   if (n == "auto") return FitSolver::Auto;
   if (n == "cholmod") return FitSolver::Cholmod;
-  throw InputError("--solver must be auto or cholmod, got '" + n + "'");
+  throw InputError("unknown fit solver '" + n + "' (auto, cholmod)");
 }
 const char* fit_solver_name(FitSolver s) { return s == FitSolver::Auto ? "auto" : "cholmod"; }
 const char* fit_method_name(FitMethod m) {
@@ -173,22 +167,12 @@ void emit_gradient(const Mesh& mesh, const std::vector<FaceGeometry>& g, double 
 // face, a non-manifold one three or more; a crease's two sides have different render vertices.
 using EdgePairs = std::vector<std::array<uint32_t, 2>>;
 EdgePairs interior_edge_pairs(const Mesh& mesh) {
-  std::vector<std::pair<uint64_t, uint32_t>> half;
-  half.reserve(mesh.num_faces() * 3);
-  for (size_t f = 0; f < mesh.num_faces(); ++f)
-    for (uint32_t c = 0; c < 3; ++c) {
-      const uint32_t a = mesh.triangles[f][(c + 1) % 3], b = mesh.triangles[f][(c + 2) % 3];
-      half.emplace_back(a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a, uint32_t(f * 3 + c));
-    }
-  std::sort(half.begin(), half.end());
+  const EdgeAdjacency adj = edge_adjacency(mesh.triangles);
   EdgePairs pairs;
-  pairs.reserve(half.size() / 2);
-  for (size_t r = 0; r < half.size();) {
-    size_t end = r + 1;
-    while (end < half.size() && half[end].first == half[r].first) ++end;
-    if (end - r == 2) pairs.push_back({half[r].second, half[r + 1].second});
-    r = end;
-  }
+  pairs.reserve(adj.num_edges());
+  auto opposite = [](uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; };  // the corner across from h
+  for (size_t e = 0; e < adj.num_edges(); ++e)
+    if (adj.valence(e) == 2) pairs.push_back({opposite(adj.edge_begin(e)[0]), opposite(adj.edge_begin(e)[1])});
   return pairs;
 }
 
@@ -289,15 +273,6 @@ struct TripletSink {
   void operator()(uint32_t i, uint32_t j, double v) { t.emplace_back(i, j, v); }
 };
 
-// CHOLMOD's supernodal LLᵀ with access to the factor, for its size and condition.
-class Cholesky : public Eigen::CholmodSupernodalLLT<SparseMatrixd, Eigen::Lower> {
- public:
-  double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
-  size_t factor_entries() const {
-    if (!m_cholmodFactor) return 0;
-    return m_cholmodFactor->is_super ? m_cholmodFactor->xsize : m_cholmodFactor->nzmax;
-  }
-};
 
 }  // namespace
 
@@ -355,34 +330,25 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const R
   return fit_vertex_values(mesh, s, face_moments(mesh, s, values), prior, o, stats_out);
 }
 
-RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments,
-                              const RowMatrixXd& prior, const FitOptions& o, FitStats* stats_out) {
-  FitStats stats;
+namespace {
+
+// One pass over the faces: the lumped masses (∫h_i over sampled faces, and the samples' own
+// Σ_j w_j h_i(p_j)) and b from the face moments, with the control variate's correction.
+struct FaceSums {
+  Eigen::VectorXd lumped_analytic, lumped_sampled;
+  RowMatrixXd b;  // #V by K
+};
+
+FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<FaceGeometry>& geom, const FaceMoments& moments,
+                   const RowMatrixXd& prior, const FitOptions& o) {
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   const Eigen::Index K = moments.rows.cols();
-  if (prior.rows() != V || prior.cols() != K) throw InputError("fit: the prior needs one row per vertex and a column per value");
-  if (!(o.alpha >= 0) || !std::isfinite(o.alpha)) throw InputError("--alpha must be finite and non-negative");
-  if (!moments.rows.allFinite() || !prior.allFinite()) throw InputError("fit: non-finite sample values");
-  stats.unknowns = mesh.num_vertices();
-  if (o.method == FitMethod::Point) {
-    if (stats_out) *stats_out = stats;
-    return prior;
-  }
-  auto clock = std::chrono::steady_clock::now();
-  check_samples(mesh, s);
-  if (static_cast<size_t>(moments.rows.rows()) != 3 * mesh.num_faces())
-    throw InputError("fit: three rows of moments per face expected");
-  const std::vector<FaceGeometry> geom = all_face_geometry(mesh);
-  // One pass over the faces: the lumped masses (∫h_i over sampled faces, and the samples' own
-  // Σ_j w_j h_i(p_j)), b from the face moments, and for the control variate each face's
-  // sampled mass block.
-  const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
   // b estimates ∫h_i f with an error proportional to f itself, not to its variation, and A⁻¹
   // amplifies it: even a constant f comes back noisy. With the control variate we estimate
   // ∫h_i (f − g_prior) from the samples and add back the exact ∫h_i g_prior = A·prior: the error
   // is then proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
-  Eigen::VectorXd lumped_analytic = Eigen::VectorXd::Zero(V), lumped_sampled = Eigen::VectorXd::Zero(V);
-  RowMatrixXd b = RowMatrixXd::Zero(V, K);
+  const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
+  FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
   for (size_t f = 0; f < mesh.num_faces(); ++f) {
     if (!face_has_samples(s, f)) continue;
     const Triangle& tri = mesh.triangles[f];
@@ -396,9 +362,9 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
       }
     }
     for (int c = 0; c < 3; ++c) {
-      lumped_analytic[tri[c]] += geom[f].area / 3;
-      lumped_sampled[tri[c]] += ls[c];
-      double* row = b.row(tri[c]).data();
+      sums.lumped_analytic[tri[c]] += geom[f].area / 3;
+      sums.lumped_sampled[tri[c]] += ls[c];
+      double* row = sums.b.row(tri[c]).data();
       const double* local = moments.rows.row(static_cast<Eigen::Index>(3 * f + size_t(c))).data();
       for (Eigen::Index q = 0; q < K; ++q) row[q] += local[q];
       if (!use_cv) continue;
@@ -409,52 +375,67 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
       }
     }
   }
-  const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? lumped_analytic : lumped_sampled;
-  // A vertex is supported when its lumped mass is a meaningful share of a typical one.
-  const double typical = lumped.sum() / static_cast<double>(std::max<Eigen::Index>(V, 1));
-  std::vector<char> free(static_cast<size_t>(V));
-  for (Eigen::Index i = 0; i < V; ++i) {
-    free[size_t(i)] = lumped[i] > 1e-12 * typical;
-    stats.unsupported += !free[size_t(i)];
-  }
-  RowMatrixXd x = prior;
-  if (o.method == FitMethod::Average) {
-    // Normalised by the samples' own Σ w h_i rather than ∫ h_i: a true weighted average, which
-    // stays within the samples' range however few there are.
-    for (Eigen::Index i = 0; i < V; ++i)
-      if (free[size_t(i)] && lumped_sampled[i] > 0) x.row(i) = b.row(i) / lumped_sampled[i];
-    stats.seconds_assemble = seconds_since(clock);
-    if (stats_out) *stats_out = stats;
-    return x;
-  }
+  return sums;
+}
 
-  // The system over free vertices (renumbered 0..n-1), lower triangle; the fixed ones' columns
-  // move to the right-hand side.
-  std::vector<Eigen::Index> slot(static_cast<size_t>(V), -1);
+void check_fit_inputs(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments, const RowMatrixXd& prior,
+                      const FitOptions& o) {
+  const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
+  if (prior.rows() != V || prior.cols() != moments.rows.cols())
+    throw InputError("fit: the prior needs one row per vertex and a column per value");
+  if (!(o.alpha >= 0) || !std::isfinite(o.alpha)) throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.alpha));
+  if (!moments.rows.allFinite() || !prior.allFinite()) throw InputError("fit: non-finite sample values");
+  check_samples(mesh, s);
+  if (static_cast<size_t>(moments.rows.rows()) != 3 * mesh.num_faces()) throw InputError("fit: three rows of moments per face expected");
+}
+
+// x = D⁻¹b, D the samples' own lumped mass: a true weighted average, which stays within the
+// samples' range however few there are.
+RowMatrixXd average_values(const FaceSums& sums, const std::vector<char>& free, const RowMatrixXd& prior) {
+  RowMatrixXd x = prior;
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    if (free[size_t(i)] && sums.lumped_sampled[i] > 0) x.row(i) = sums.b.row(i) / sums.lumped_sampled[i];
+  return x;
+}
+
+}  // namespace
+
+FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments, const RowMatrixXd& prior,
+                              const FitOptions& o, FitStats* stats) {
+  check_fit_inputs(mesh, s, moments, prior, o);
+  const Stopwatch clock;
+  const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
+  const Eigen::Index K = moments.rows.cols();
+  const std::vector<FaceGeometry> geom = all_face_geometry(mesh);
+  FaceSums sums = sum_faces(mesh, s, geom, moments, prior, o);
+  const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? sums.lumped_analytic : sums.lumped_sampled;
+  // A vertex is free when its lumped mass is a meaningful share of a typical one; the others keep
+  // their prior, and their columns move to the right-hand side.
+  const double typical = lumped.sum() / static_cast<double>(std::max<Eigen::Index>(V, 1));
+  FitSystem sys;
+  sys.slot.assign(static_cast<size_t>(V), -1);
   Eigen::Index n = 0;
   for (Eigen::Index i = 0; i < V; ++i)
-    if (free[size_t(i)]) slot[size_t(i)] = n++;
-  RowMatrixXd rhs;
+    if (lumped[i] > 1e-12 * typical) sys.slot[size_t(i)] = n++;
   if (n == V) {
-    rhs.swap(b);  // every vertex free, the common case: no copy
+    sys.rhs.swap(sums.b);  // every vertex free, the common case: no copy
   } else {
-    rhs.resize(n, K);
+    sys.rhs.resize(n, K);
     for (Eigen::Index i = 0; i < V; ++i)
-      if (slot[size_t(i)] >= 0) rhs.row(slot[size_t(i)]) = b.row(i);
-    RowMatrixXd().swap(b);
+      if (sys.slot[size_t(i)] >= 0) sys.rhs.row(sys.slot[size_t(i)]) = sums.b.row(i);
   }
   // Straight into the final pattern: no triplets, whose memory costs more than their arithmetic.
   const bool edge_term = o.alpha > 0 && o.regularizer == Regularizer::Edge;
   const EdgePairs edges = edge_term ? interior_edge_pairs(mesh) : EdgePairs();
-  RowSparseMatrixd full = system_pattern(mesh, slot, n, edge_term ? &edges : nullptr, o.threads);
-  const int* outer = full.outerIndexPtr();
-  const int* inner = full.innerIndexPtr();
-  double* value = full.valuePtr();
+  sys.matrix = system_pattern(mesh, sys.slot, n, edge_term ? &edges : nullptr, o.threads);
+  const int* outer = sys.matrix.outerIndexPtr();
+  const int* inner = sys.matrix.innerIndexPtr();
+  double* value = sys.matrix.valuePtr();
   auto sink = [&](uint32_t i, uint32_t j, double v) {
-    const Eigen::Index si = slot[i], sj = slot[j];
+    const Eigen::Index si = sys.slot[i], sj = sys.slot[j];
     if (si < 0) return;
     if (sj < 0) {
-      rhs.row(si) -= v * prior.row(j);
+      sys.rhs.row(si) -= v * prior.row(j);
       return;
     }
     const int* last = inner + outer[si + 1];
@@ -469,72 +450,147 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
   }
   // Jacobi scaling: a unit diagonal makes the factor's condition estimate mean "digits lost"
   // whatever the mesh's units and the spread of its triangle sizes, and is CG's preconditioner.
-  Eigen::VectorXd d(n), lumped_free(n);
+  sys.scale.resize(n);
+  sys.lumped.resize(n);
   for (Eigen::Index i = 0; i < V; ++i)
-    if (slot[size_t(i)] >= 0) lumped_free[slot[size_t(i)]] = lumped[i];
-  const Eigen::VectorXd diag = full.diagonal();
-  for (Eigen::Index i = 0; i < n; ++i) d[i] = diag[i] > 0 ? 1 / std::sqrt(diag[i]) : 1.0;
+    if (sys.slot[size_t(i)] >= 0) sys.lumped[sys.slot[size_t(i)]] = lumped[i];
+  const Eigen::VectorXd diag = sys.matrix.diagonal();
+  for (Eigen::Index i = 0; i < n; ++i) sys.scale[i] = diag[i] > 0 ? 1 / std::sqrt(diag[i]) : 1.0;
   for (Eigen::Index i = 0; i < n; ++i)
-    for (RowSparseMatrixd::InnerIterator it(full, i); it; ++it) it.valueRef() *= d[i] * d[it.col()];
-  stats.system_nonzeros = static_cast<size_t>(full.nonZeros());
-  stats.seconds_assemble = seconds_since(clock);
+    for (RowSparseMatrixd::InnerIterator it(sys.matrix, i); it; ++it) it.valueRef() *= sys.scale[i] * sys.scale[it.col()];
+  sys.rhs = sys.scale.asDiagonal() * sys.rhs;
+  if (stats) {
+    stats->unknowns = mesh.num_vertices();
+    stats->unsupported = static_cast<size_t>(V - n);
+    stats->system_nonzeros = static_cast<size_t>(sys.matrix.nonZeros());
+    stats->seconds_assemble = clock.total();
+  }
+  return sys;
+}
 
+// CHOLMOD's supernodal LLᵀ with access to the factor, for its size and condition.
+class FitSystemSolver::Cholesky : public Eigen::CholmodSupernodalLLT<SparseMatrixd, Eigen::Lower> {
+ public:
+  double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
+  size_t factor_entries() const {
+    if (!m_cholmodFactor) return 0;
+    return m_cholmodFactor->is_super ? m_cholmodFactor->xsize : m_cholmodFactor->nzmax;
+  }
+};
+
+FitSystemSolver::FitSystemSolver(const FitSystem& system, const FitOptions& options) : system_(system), options_(options) {}
+FitSystemSolver::~FitSystemSolver() = default;
+
+// Singular, or too ill-conditioned to trust: CHOLMOD stops at a non-positive pivot, or the
+// smallest pivot is below kMinRcond of the largest. (A threshold of 1e-12 let through systems
+// that turned sample noise into errors of 2000% with the sampled mass and 2 samples per
+// triangle; the analytic mass matrix, Jacobi-scaled, stays far above it even with 1e-4° slivers.)
+// If it fails, add λ·D (D the lumped mass) with λ = 1e-9, 1e-6, 1e-3, 1: the smallest that holds.
+void FitSystemSolver::factorize(FitStats& stats) {
+  const Stopwatch clock;
+  const Eigen::Index n = system_.matrix.rows();
+  const SparseMatrixd lower = system_.matrix.triangularView<Eigen::Lower>();
+  cholesky_ = std::make_unique<Cholesky>();
+  cholesky_->cholmod().print = 0;  // failures are ours to report, in one line
+  cholesky_->analyzePattern(lower);
+  const double kMinRcond = 1e-7;
+  auto holds = [&]() { return cholesky_->info() == Eigen::Success && cholesky_->rcond() > kMinRcond; };
+  cholesky_->factorize(lower);
+  bool ok = holds();
+  for (double lambda : {1e-9, 1e-6, 1e-3, 1.0}) {
+    if (ok) break;
+    SparseMatrixd m = lower;
+    for (Eigen::Index i = 0; i < n; ++i) m.coeffRef(i, i) += lambda * system_.lumped[i] * system_.scale[i] * system_.scale[i];
+    cholesky_->factorize(m);
+    ok = holds();
+    if (ok) stabilizer_ = lambda;
+  }
+  if (!ok) throw SolverError("fit: the least-squares system could not be factorised even when pulled towards the point samples");
+  factor_entries_ = cholesky_->factor_entries();
+  stats.seconds_factor += clock.total();
+}
+
+RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out) {
+  FitStats stats = stats_out ? *stats_out : FitStats();
+  Stopwatch clock;
+  const FitSystem& sys = system_;
+  const Eigen::Index n = sys.matrix.rows(), K = sys.rhs.cols();
+  const std::vector<Eigen::Index>& slot = sys.slot;
+  RowMatrixXd x = prior;
+  const double vectors_bytes = 8.0 * static_cast<double>(n) * static_cast<double>(K);
   // Conjugate gradients first where the system is known to be well conditioned: the analytic
   // mass matrix, Jacobi-scaled, has eigenvalues in [1/2, 2] whatever the mesh. Started at the
   // prior, they need a few dozen passes over the matrix; a Cholesky factor of a 3-D mesh fills in.
-  const double vectors_bytes = 8.0 * static_cast<double>(n) * static_cast<double>(K);
-  if (n > 0 && o.solver == FitSolver::Auto && o.mass == MassMatrix::Analytic) {
+  if (n > 0 && !cholesky_ && options_.solver == FitSolver::Auto && options_.mass == MassMatrix::Analytic) {
     RowMatrixXd y(n, K);
-    for (Eigen::Index i = 0; i < V; ++i)
-      if (slot[size_t(i)] >= 0) y.row(slot[size_t(i)]) = prior.row(i) / d[slot[size_t(i)]];
-    stats.seconds_assemble += seconds_since(clock);
-    const BlockCgResult cg =
-        block_conjugate_gradient(full, d.asDiagonal() * rhs, y, {o.cg_tolerance, o.cg_max_iterations, o.threads});
+    for (size_t i = 0; i < slot.size(); ++i)
+      if (slot[i] >= 0) y.row(slot[i]) = prior.row(static_cast<Eigen::Index>(i)) / sys.scale[slot[i]];
+    const BlockCgResult cg = block_conjugate_gradient(sys.matrix, sys.rhs, y, {options_.cg_tolerance, options_.cg_max_iterations, options_.threads});
     stats.cg_iterations = cg.iterations;
     if (cg.converged && y.allFinite()) {
-      for (Eigen::Index i = 0; i < V; ++i)
-        if (slot[size_t(i)] >= 0) x.row(i) = d[slot[size_t(i)]] * y.row(slot[size_t(i)]);
+      for (size_t i = 0; i < slot.size(); ++i)
+        if (slot[i] >= 0) x.row(static_cast<Eigen::Index>(i)) = sys.scale[slot[i]] * y.row(slot[i]);
       stats.solver = "cg";
-      stats.seconds_solve = seconds_since(clock);
-      stats.solve_memory_mib = (12.0 * static_cast<double>(full.nonZeros()) + 6 * vectors_bytes) / (1024.0 * 1024.0);
+      stats.seconds_solve += clock.total();
+      stats.solve_memory_mib = (12.0 * static_cast<double>(sys.matrix.nonZeros()) + 6 * vectors_bytes) / (1024.0 * 1024.0);
       if (stats_out) *stats_out = stats;
       return x;
     }
     // Not a warning: a stiff system (slivers beside large faces) is CHOLMOD's job, and the
-    // stats say which solver ran. The clock runs on: CG's attempt counts as factorisation time.
+    // stats say which solver ran. CG's attempt counts as factorisation time.
+    stats.seconds_factor += clock.lap();
   }
   if (n > 0) {
+    if (!cholesky_) factorize(stats);
+    clock.lap();
     stats.solver = "cholmod";
-    SparseMatrixd system = full.triangularView<Eigen::Lower>();
-    RowSparseMatrixd().swap(full);
-    Cholesky solver;
-    solver.cholmod().print = 0;  // failures are ours to report, in one line
-    solver.analyzePattern(system);
-    // Singular, or too ill-conditioned to trust: CHOLMOD stops at a non-positive pivot, or the
-    // smallest pivot is below kMinRcond of the largest. (A threshold of 1e-12 let through
-    // systems that turned sample noise into errors of 2000% with --mass sampled and 2 samples
-    // per triangle; the analytic mass matrix, Jacobi-scaled, stays far above it even with
-    // 1e-4° slivers.)
-    const double kMinRcond = 1e-7;
-    auto holds = [&]() { return solver.info() == Eigen::Success && solver.rcond() > kMinRcond; };
-    solver.factorize(system);
-    bool ok = holds();
-    for (double lambda : {1e-9, 1e-6, 1e-3, 1.0}) {
-      if (ok) break;
-      SparseMatrixd m = system;
-      for (Eigen::Index i = 0; i < n; ++i) m.coeffRef(i, i) += lambda * lumped_free[i] * d[i] * d[i];
-      solver.factorize(m);
-      ok = holds();
-      if (ok) {
-        stats.stabilizer = lambda;
-        for (Eigen::Index i = 0; i < V; ++i)
-          if (slot[size_t(i)] >= 0) rhs.row(slot[size_t(i)]) += lambda * lumped[i] * prior.row(i);
-      }
+    stats.stabilizer = stabilizer_;
+    stats.factor_nonzeros = factor_entries_;
+    // The stabilised system (M + λ·S D S) y = S b + λ·S D prior, in the scaled unknowns y = x / S.
+    Eigen::MatrixXd rhs = sys.rhs;
+    if (stabilizer_ > 0)
+      for (size_t i = 0; i < slot.size(); ++i)
+        if (slot[i] >= 0) rhs.row(slot[i]) += stabilizer_ * sys.lumped[slot[i]] * sys.scale[slot[i]] * prior.row(static_cast<Eigen::Index>(i));
+    const Eigen::MatrixXd sol = sys.scale.asDiagonal() * cholesky_->solve(rhs);
+    if (!sol.allFinite()) throw SolverError("fit: the least-squares solve produced non-finite values");
+    for (size_t i = 0; i < slot.size(); ++i)
+      if (slot[i] >= 0) x.row(static_cast<Eigen::Index>(i)) = sol.row(slot[i]);
+    stats.seconds_solve += clock.total();
+  }
+  const double bytes = 12.0 * static_cast<double>(stats.system_nonzeros + size_t(n)) / 2 + 8.0 * static_cast<double>(stats.factor_nonzeros) +
+                       3 * vectors_bytes;
+  stats.solve_memory_mib = bytes / (1024.0 * 1024.0);
+  if (stats_out) *stats_out = stats;
+  return x;
+}
+
+RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments,
+                              const RowMatrixXd& prior, const FitOptions& o, FitStats* stats_out) {
+  check_fit_inputs(mesh, s, moments, prior, o);
+  FitStats stats;
+  stats.unknowns = mesh.num_vertices();
+  RowMatrixXd x;
+  if (o.method == FitMethod::Point) {
+    x = prior;
+  } else if (o.method == FitMethod::Average) {
+    const Stopwatch clock;
+    const FaceSums sums = sum_faces(mesh, s, all_face_geometry(mesh), moments, prior, o);
+    const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? sums.lumped_analytic : sums.lumped_sampled;
+    const double typical = lumped.sum() / static_cast<double>(std::max<size_t>(mesh.num_vertices(), 1));
+    std::vector<char> free(mesh.num_vertices());
+    for (size_t i = 0; i < free.size(); ++i) {
+      free[i] = lumped[static_cast<Eigen::Index>(i)] > 1e-12 * typical;
+      stats.unsupported += !free[i];
     }
-    if (!ok) throw SolverError("fit: the least-squares system could not be factorised even when pulled towards the point samples");
+    x = average_values(sums, free, prior);
+    stats.seconds_assemble = clock.total();
+  } else {
+    const FitSystem system = assemble_fit_system(mesh, s, moments, prior, o, &stats);
+    FitSystemSolver solver(system, o);
+    x = solver.solve(prior, &stats);
     if (o.mass == MassMatrix::Sampled && static_cast<double>(s.size()) < 8.0 * static_cast<double>(mesh.num_faces()))
       stats.warning = "fit: the sampled mass matrix with under 8 samples per triangle extrapolates vertices that samples barely "
-                      "see; errors can be far above point sampling (docs/fit.md). Prefer --mass analytic.";
+                      "see; errors can be far above point sampling (docs/fit.md). Prefer the analytic mass matrix.";
     if (stats.stabilizer > 0) {
       char buf[256];
       std::snprintf(buf, sizeof buf,
@@ -543,17 +599,7 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
                     o.alpha, mass_matrix_name(o.mass), stats.stabilizer);
       stats.warning += (stats.warning.empty() ? "" : " ") + std::string(buf);
     }
-    stats.factor_nonzeros = solver.factor_entries();
-    stats.seconds_factor = seconds_since(clock);
-    const Eigen::MatrixXd sol = d.asDiagonal() * solver.solve(Eigen::MatrixXd(d.asDiagonal() * rhs));
-    if (!sol.allFinite()) throw SolverError("fit: the least-squares solve produced non-finite values");
-    for (Eigen::Index i = 0; i < V; ++i)
-      if (slot[size_t(i)] >= 0) x.row(i) = sol.row(slot[size_t(i)]);
-    stats.seconds_solve = seconds_since(clock);
   }
-  const double bytes = 12.0 * static_cast<double>(stats.system_nonzeros + size_t(n)) / 2 + 8.0 * static_cast<double>(stats.factor_nonzeros) +
-                       3 * vectors_bytes;
-  stats.solve_memory_mib = bytes / (1024.0 * 1024.0);
   if (stats_out) *stats_out = stats;
   return x;
 }

@@ -3,9 +3,11 @@
 #pragma once
 
 #include <Eigen/SparseCore>
+#include <memory>
 #include <string>
 
-#include "prt/surface_samples.h"
+#include "prtsub/prt/block_cg.h"
+#include "prtsub/prt/surface_samples.h"
 
 namespace prtsub {
 
@@ -88,13 +90,55 @@ FaceMoments face_moments(const Mesh& mesh, const SurfaceSamples& samples, const 
 //! \param values #S by K, the signal at the samples
 RowMatrixXd fit_right_hand_side(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values);
 
+//! The regularised least-squares system (A + αR) x = b over the vertices the samples support,
+//! Jacobi-scaled: M = S(A + αR)S and y = S⁻¹x, S = diag(A + αR)^(-1/2). Vertices that no sampled
+//! face touches are fixed at the prior, their columns moved to the right-hand side.
+struct FitSystem {
+  RowSparseMatrixd matrix;         //!< n by n, M, both triangles
+  RowMatrixXd rhs;                 //!< n by K, S·b
+  Eigen::VectorXd scale;           //!< n: the diagonal of S
+  Eigen::VectorXd lumped;          //!< n: the lumped mass ∫h_i of each unknown (the stabiliser's weight)
+  std::vector<Eigen::Index> slot;  //!< #V: a vertex's unknown, or -1 when it is fixed at the prior
+};
+
+//! Assembles the system of FitMethod::LeastSquares (the other methods need none).
+//! \param prior #V by K: the point-sampled values; with the control variate, b is estimated around them
+//! \throw InputError for bad shapes, non-finite values or α
+FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& samples, const FaceMoments& moments,
+                              const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
+
+//! Solves a FitSystem for all K right-hand sides at once. With the analytic mass matrix and
+//! FitSolver::Auto: block conjugate gradients started at the prior (the scaled system is well
+//! conditioned on any mesh). Otherwise, or when CG stalls: one CHOLMOD supernodal Cholesky
+//! factorisation, kept for every later solve. A singular system (α = 0 with a mass matrix that
+//! cannot see a vertex) is stabilised by a pull towards the prior, λ·D(x − prior), with the
+//! smallest λ that factorises; FitStats says so. Keeps a reference to `system`.
+class FitSystemSolver {
+ public:
+  FitSystemSolver(const FitSystem& system, const FitOptions& options);
+  ~FitSystemSolver();
+  FitSystemSolver(const FitSystemSolver&) = delete;
+  FitSystemSolver& operator=(const FitSystemSolver&) = delete;
+  //! x, #V by K (all finite): the solution, with fixed vertices at `prior`. `stats` gains the
+  //! solve's figures (its other fields are kept).
+  //! \throw SolverError if no stabilised system factorises
+  RowMatrixXd solve(const RowMatrixXd& prior, FitStats* stats = nullptr);
+
+ private:
+  class Cholesky;
+  void factorize(FitStats& stats);
+  const FitSystem& system_;
+  FitOptions options_;
+  std::unique_ptr<Cholesky> cholesky_;
+  double stabilizer_ = 0;
+  size_t factor_entries_ = 0;
+};
+
 //! Vertex values from the signal's face moments at the samples.
+//!  - Point: the prior.
 //!  - Average: D⁻¹b, D the lumped mass (∫ h_i): the barycentric-weighted average of the samples.
-//!  - LeastSquares: (A + αR) x = b for all K columns, by block conjugate gradients started at
-//!    the prior, or by one sparse Cholesky factorisation (FitOptions::solver).
-//! A vertex no sampled face touches keeps its prior value. When the system is singular to
-//! working precision (α = 0 with a mass matrix that cannot see a vertex), it is stabilised by a
-//! pull towards the prior, λ·D(x − prior), with the smallest λ that factorises; FitStats says so.
+//!  - LeastSquares: assemble_fit_system, then FitSystemSolver.
+//! A vertex no sampled face touches keeps its prior value.
 //! \param prior #V by K: the point-sampled values (what Point returns)
 //! \return #V by K, all finite
 //! \throw SolverError if no stabilised system factorises, InputError for bad shapes or α

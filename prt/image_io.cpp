@@ -1,7 +1,7 @@
 // OpenImageIO wrapper. OIIO reports errors through geterror(); every failure becomes an
 // IoError naming the file. PNG output is encoded to sRGB here, explicitly: OIIO would
 // otherwise quantise float data linearly while tagging the file sRGB (STACK.md).
-#include "prt/image_io.h"
+#include "prtsub/prt/image_io.h"
 
 #include <unistd.h>
 
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "subdiv/exceptions.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "prt/lights.h"
+#include "prtsub/prt/lights.h"
 
 namespace prtsub {
 

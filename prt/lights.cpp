@@ -10,16 +10,15 @@
 // (2l+1)×(2l+1) rotation matrix is found exactly by least squares over a fixed set of 4(2l+1)
 // directions. It has no sign conventions to get wrong, and it is accurate to rounding for
 // every order up to 10, as tests show against projecting the rotated function directly.
-#include "prt/lights.h"
+#include "prtsub/prt/lights.h"
 
 #include <Eigen/Dense>
 #include <cmath>
 #include <sstream>
 
-#include "prt/image_io.h"
-#include "prt/sampling.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {
@@ -57,20 +56,6 @@ std::vector<Eigen::Vector3d> spread_directions(int n) {
     d[static_cast<size_t>(i)] = Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
   }
   return d;
-}
-
-std::vector<double> split_numbers(const std::string& s, const std::string& what) {
-  std::vector<double> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(v))
-      throw InputError(what + ": expected numbers separated by commas, got '" + s + "'");
-    out.push_back(v);
-  }
-  return out;
 }
 
 }  // namespace
@@ -229,58 +214,6 @@ ShLight rotate_light(const ShLight& light, const Eigen::Matrix3d& R) {
   ShLight out = light;
   out.coeffs = sh_rotation(light.order, R) * light.coeffs;
   return out;
-}
-
-Eigen::Matrix3d parse_rotation(const std::string& spec) {
-  size_t last = spec.rfind(',');
-  if (last == std::string::npos) throw InputError("--light-rotate: expected AXIS,DEG, got '" + spec + "'");
-  std::string axis_s = spec.substr(0, last);
-  double deg = split_numbers(spec.substr(last + 1), "--light-rotate")[0];
-  Eigen::Vector3d axis;
-  if (axis_s == "x" || axis_s == "X") axis = Eigen::Vector3d::UnitX();
-  else if (axis_s == "y" || axis_s == "Y") axis = Eigen::Vector3d::UnitY();
-  else if (axis_s == "z" || axis_s == "Z") axis = Eigen::Vector3d::UnitZ();
-  else {
-    std::vector<double> v = split_numbers(axis_s, "--light-rotate");
-    if (v.size() != 3) throw InputError("--light-rotate: AXIS is x, y, z or X,Y,Z; got '" + axis_s + "'");
-    axis = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-  if (!(axis.norm() > 0)) throw InputError("--light-rotate: the axis must be non-zero");
-  return Eigen::AngleAxisd(deg * M_PI / 180, axis.normalized()).toRotationMatrix();
-}
-
-ShLight parse_light(const std::string& spec, int order) {
-  const size_t colon = spec.find(':');
-  const std::string kind = spec.substr(0, colon), arg = colon == std::string::npos ? "" : spec.substr(colon + 1);
-  const std::string what = "--light " + spec;
-  if (kind == "env") {
-    if (arg.empty()) throw InputError(what + ": expected env:PATH");
-    return environment_light(order, read_image(arg));
-  }
-  if (kind == "sh") return coefficients_light(order, split_numbers(arg, what));
-  if (kind == "sun") {
-    std::vector<double> v = split_numbers(arg, what);
-    if (v.size() != 3 && v.size() != 4) throw InputError(what + ": expected sun:X,Y,Z[,RADIUS_DEG]");
-    return sun_light(order, Eigen::Vector3d(v[0], v[1], v[2]), v.size() == 4 ? v[3] : 0.5);
-  }
-  if (kind == "sky") {
-    if (arg.empty()) return default_sky(order);
-    std::vector<double> v = split_numbers(arg, what);
-    if (v.size() != 3 || !(Eigen::Vector3d(v[0], v[1], v[2]).norm() > 0)) throw InputError(what + ": expected sky or sky:X,Y,Z (up)");
-    return default_sky(order, Eigen::Vector3d(v[0], v[1], v[2]).normalized());
-  }
-  if (kind == "random") {
-    std::vector<double> v = split_numbers(arg, what);
-    if (v.size() != 1 || v[0] < 0 || v[0] != std::floor(v[0])) throw InputError(what + ": expected random:SEED");
-    return random_light(order, static_cast<uint64_t>(v[0]));
-  }
-  if (kind == "const") {
-    std::vector<double> v = split_numbers(arg, what);
-    if (v.size() == 1) v = {v[0], v[0], v[0]};
-    if (v.size() != 3) throw InputError(what + ": expected const:V or const:R,G,B");
-    return constant_light(order, Eigen::Vector3d(v[0], v[1], v[2]));
-  }
-  throw InputError(what + ": unknown light kind '" + kind + "' (env, sh, sun, sky, random, const)");
 }
 
 }  // namespace prtsub

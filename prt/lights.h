@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 
@@ -66,13 +66,5 @@ ShLight rotate_light(const ShLight& light, const Eigen::Matrix3d& rotation);
 
 //! Block-diagonal SH rotation matrix (#K by #K): coefficients of f(R⁻¹ ω) are M · c.
 Eigen::MatrixXd sh_rotation(int order, const Eigen::Matrix3d& rotation);
-
-//! Parses a light spec of the CLI: env:PATH, sh:c0,c1,..., sun:X,Y,Z[,RADIUS_DEG], sky[:X,Y,Z]
-//! (the up direction), random:SEED, const:R,G,B. Environment maps are read with read_image.
-//! \throw InputError naming the spec
-ShLight parse_light(const std::string& spec, int order);
-
-//! Parses AXIS,DEG where AXIS is x, y, z or three numbers X,Y,Z. \throw InputError
-Eigen::Matrix3d parse_rotation(const std::string& spec);
 
 }  // namespace prtsub

@@ -1,6 +1,6 @@
 // Embree reports errors through a callback; we record the first one and throw from C++ after
 // the rtc* call returns, never through Embree's C frames.
-#include "prt/ray_scene.h"
+#include "prtsub/prt/ray_scene.h"
 
 #include <cfloat>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <mutex>
 #include <string>
 
-#include "subdiv/exceptions.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 

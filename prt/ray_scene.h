@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 

@@ -1,5 +1,5 @@
 // Edge estimates see only the two vertices of an edge. That is cheap, but a shadow crossing a
-// long edge between two lit vertices is invisible to them; --max-edge pre-refinement (D3DX's
+// long edge between two lit vertices is invisible to them; max_edge pre-refinement (D3DX's
 // answer) bounds how long such an edge can be.
 //
 // "Length" is ours. The surface RMS error that eval measures integrates squared error over
@@ -14,11 +14,12 @@
 // corners' mean, times sqrt(3·area) (the edge-length scale of a triangle of that area,
 // summed over three edges), joins the face's key until the face is first split. After that
 // the new vertices themselves see the shadow. Cost: one transfer per input face.
-#include "prt/refine_signal.h"
+#include "prtsub/prt/refine_signal.h"
 
+#include <algorithm>
 #include <cmath>
 
-#include "subdiv/exceptions.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 
@@ -29,7 +30,7 @@ EdgeEstimate parse_estimate(const std::string& name) {
   if (name == "length") return EdgeEstimate::Length;
   if (name == "probe") return EdgeEstimate::Probe;
   if (name == "root") return EdgeEstimate::Root;
-  throw InputError("--estimate must be relative, shadow, curvature, length, probe or root, got '" + name + "'");
+  throw InputError("unknown estimate '" + name + "' (relative, shadow, curvature, length, probe, root)");
 }
 
 const char* estimate_name(EdgeEstimate e) {
@@ -44,19 +45,14 @@ const char* estimate_name(EdgeEstimate e) {
   return "?";
 }
 
-TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOptions& options)
-    : scene_(scene), options_(options) {
-  check_transfer_options(options.transfer);
-}
-
-double TransferSignal::edge_error(const EdgeView& e) const {
+double edge_estimate(EdgeEstimate estimate, const EdgeView& e, double curvature_guard_deg) {
   double d2 = 0, a2 = 0, b2 = 0;
   for (int i = 0; i < e.K; ++i) {
     const double d = e.va[i] - e.vb[i];
     d2 += d * d, a2 += e.va[i] * e.va[i], b2 += e.vb[i] * e.vb[i];
   }
   const double diff = std::sqrt(d2);
-  switch (options_.estimate) {
+  switch (estimate) {
     case EdgeEstimate::Relative: {
       const double mean = 0.5 * (std::sqrt(a2) + std::sqrt(b2));
       return mean > 1e-12 ? diff / mean : (diff > 0 ? diff / 1e-12 : 0.0);
@@ -64,13 +60,34 @@ double TransferSignal::edge_error(const EdgeView& e) const {
     case EdgeEstimate::Shadow: return diff;
     case EdgeEstimate::Curvature: {
       const double angle = std::acos(std::clamp(e.na.dot(e.nb), -1.0, 1.0));
-      return diff / std::max(angle, options_.curvature_guard_deg * M_PI / 180);
+      return diff / std::max(angle, curvature_guard_deg * M_PI / 180);
     }
     case EdgeEstimate::Length:
     case EdgeEstimate::Probe: return diff * (e.pa - e.pb).norm();
     case EdgeEstimate::Root: return diff * std::sqrt((e.pa - e.pb).norm());
   }
   return diff;
+}
+
+double probe_estimate(EdgeEstimate estimate, const FaceProbe& f, const double* probed) {
+  if (estimate != EdgeEstimate::Probe && estimate != EdgeEstimate::Root) return 0;
+  double d2 = 0;
+  for (int k = 0; k < f.K; ++k) {
+    const double d = probed[k] - (f.va[k] + f.vb[k] + f.vc[k]) / 3;
+    d2 += d * d;
+  }
+  // In the unit of the edges' estimate: a length (√(3a), an equilateral edge), or its root.
+  const double length = std::sqrt(3 * f.area);
+  return std::sqrt(d2) * (estimate == EdgeEstimate::Root ? std::sqrt(length) : length);
+}
+
+TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOptions& options)
+    : scene_(scene), options_(options) {
+  check_transfer_options(options.transfer);
+}
+
+double TransferSignal::edge_error(const EdgeView& e) const {
+  return edge_estimate(options_.estimate, e, options_.curvature_guard_deg);
 }
 
 void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd&, RowMatrixXd& values) {
@@ -111,16 +128,7 @@ void TransferSignal::probe_faces(const std::vector<FaceProbe>& faces, std::vecto
   RowMatrixXd t = shadowed_transfer(scene_, points, normals, o, &stats);
   rays_ += stats.rays;
   extra.resize(faces.size());
-  for (size_t i = 0; i < faces.size(); ++i) {
-    const FaceProbe& f = faces[i];
-    double d2 = 0;
-    for (int k = 0; k < f.K; ++k) {
-      const double d = t(static_cast<Eigen::Index>(i), k) - (f.va[k] + f.vb[k] + f.vc[k]) / 3;
-      d2 += d * d;
-    }
-    // In the unit of the edges' estimate: a length (√(3a), an equilateral edge), or its root.
-    extra[i] = std::sqrt(d2) * (root ? std::sqrt(std::sqrt(3 * f.area)) : std::sqrt(3 * f.area));
-  }
+  for (size_t i = 0; i < faces.size(); ++i) extra[i] = probe_estimate(options_.estimate, faces[i], t.row(static_cast<Eigen::Index>(i)).data());
 }
 
 }  // namespace prtsub

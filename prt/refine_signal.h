@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "prt/transfer.h"
-#include "subdiv/refine.h"
+#include "prtsub/prt/transfer.h"
+#include "prtsub/subdiv/refine.h"
 
 namespace prtsub {
 
@@ -29,6 +29,15 @@ struct TransferSignalOptions {
   double curvature_guard_deg = 10;  //!< θ0 of the curvature estimate
   TransferOptions transfer;        //!< order, rays, seed, threads of new vertices' transfer
 };
+
+//! An estimate's value on one edge (Probe ranks edges as Length does, Root as ‖Δt‖·√|ab|).
+//! \param curvature_guard_deg θ0 of the curvature estimate
+double edge_estimate(EdgeEstimate estimate, const EdgeView& edge, double curvature_guard_deg = 10);
+
+//! The extra key of a probed face in the unit of the edges' estimate: the probe's distance from
+//! the corners' mean times √(3·area) (Probe) or its square root (Root); 0 for other estimates.
+//! \param probed the transfer traced at the face's centroid (f.K values)
+double probe_estimate(EdgeEstimate estimate, const FaceProbe& face, const double* probed);
 
 //! Refinement's signal: transfer computed with the scene of the (unchanged) geometry.
 class TransferSignal : public RefinementSignal {

@@ -9,62 +9,23 @@
 // dot product, which is what a vertex shader plus the rasteriser do. The reference computes
 // transfer at every hit point, with the interpolated shading normal, through the same
 // estimator as the bake.
-#include "prt/render.h"
+#include "prtsub/prt/render.h"
 
 #include <cmath>
 #include <limits>
 #include <sstream>
 
-#include "prt/image_io.h"
-#include "prt/parallel.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/parallel.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
-namespace {
-
-Eigen::Vector3d parse_vec3(const std::string& s, const std::string& what) {
-  std::stringstream ss(s);
-  std::string item;
-  std::vector<double> v;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x))
-      throw InputError("--camera: bad number in " + what + "='" + s + "'");
-    v.push_back(x);
-  }
-  if (v.size() != 3) throw InputError("--camera: " + what + " needs three numbers, got '" + s + "'");
-  return {v[0], v[1], v[2]};
-}
-
-}  // namespace
-
-Camera parse_camera(const std::string& spec) {
-  Camera cam;
-  bool has_eye = false, has_target = false;
-  std::stringstream ss(spec);
-  std::string part;
-  while (std::getline(ss, part, ':')) {
-    size_t eq = part.find('=');
-    if (eq == std::string::npos) throw InputError("--camera: expected key=value, got '" + part + "'");
-    std::string key = part.substr(0, eq), value = part.substr(eq + 1);
-    if (key == "eye") cam.eye = parse_vec3(value, key), has_eye = true;
-    else if (key == "target") cam.target = parse_vec3(value, key), has_target = true;
-    else if (key == "up") cam.up = parse_vec3(value, key);
-    else if (key == "fov") {
-      char* end = nullptr;
-      cam.fov_deg = std::strtod(value.c_str(), &end);
-      if (end != value.c_str() + value.size() || !(cam.fov_deg > 0 && cam.fov_deg < 180))
-        throw InputError("--camera: fov must be between 0 and 180 degrees, got '" + value + "'");
-    } else {
-      throw InputError("--camera: unknown key '" + key + "' (eye, target, up, fov)");
-    }
-  }
-  if (!has_eye || !has_target) throw InputError("--camera: needs eye=X,Y,Z and target=X,Y,Z (or 'auto')");
-  Eigen::Vector3d fwd = cam.target - cam.eye;
-  if (!(fwd.norm() > 0)) throw InputError("--camera: eye and target coincide");
-  if (!(fwd.normalized().cross(cam.up.normalized()).norm() > 1e-6)) throw InputError("--camera: up is parallel to the view direction");
-  return cam;
+void check_camera(const Camera& cam) {
+  const Eigen::Vector3d fwd = cam.target - cam.eye;
+  if (!cam.eye.allFinite() || !cam.target.allFinite() || !cam.up.allFinite()) throw InputError("camera: non-finite eye, target or up");
+  if (!(fwd.norm() > 0)) throw InputError("camera: eye and target coincide");
+  if (!(cam.up.norm() > 0) || !(fwd.normalized().cross(cam.up.normalized()).norm() > 1e-6))
+    throw InputError("camera: up is zero or parallel to the view direction");
+  if (!(cam.fov_deg > 0 && cam.fov_deg < 180)) throw InputError("camera: fov must be between 0 and 180 degrees");
 }
 
 Camera auto_camera(const Bounds& b, int width, int height) {
@@ -99,7 +60,8 @@ size_t SurfaceHits::covered() const {
 }
 
 SurfaceHits trace_primary(const RayScene& scene, const Camera& cam, int W, int H, int threads) {
-  if (W < 1 || H < 1 || W > 16384 || H > 16384) throw InputError("--size: width and height must be 1 to 16384");
+  if (W < 1 || H < 1 || W > 16384 || H > 16384) throw InputError("frame size " + std::to_string(W) + "x" + std::to_string(H) + ": width and height must be 1 to 16384");
+  check_camera(cam);
   SurfaceHits hits;
   hits.width = W, hits.height = H;
   const size_t n = static_cast<size_t>(W) * H;

@@ -5,9 +5,9 @@
 
 #include <string>
 
-#include "prt/lights.h"
-#include "prt/ray_scene.h"
-#include "prt/transfer.h"
+#include "prtsub/prt/lights.h"
+#include "prtsub/prt/ray_scene.h"
+#include "prtsub/prt/transfer.h"
 
 namespace prtsub {
 
@@ -17,8 +17,9 @@ struct Camera {
   double fov_deg = 40;
 };
 
-//! Parses eye=X,Y,Z:target=X,Y,Z:up=X,Y,Z:fov=DEG (up and fov optional). \throw InputError
-Camera parse_camera(const std::string& spec);
+//! Checks that a camera can form an image: eye and target apart, up not along the view, fov in
+//! (0, 180). \throw InputError naming the problem
+void check_camera(const Camera& camera);
 
 //! A three-quarter view that frames the whole bounding box. The up axis is +z when the box is
 //! much flatter in z than in x and y (a z-up site), else +y.

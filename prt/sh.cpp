@@ -7,7 +7,7 @@
 // and y_lm = √2 K_l^m Q_l^m Re/Im((x+iy)^m) for m > 0 / m < 0, K_l^0 Q_l^0 for m = 0, with
 // K_l^m = sqrt((2l+1)/(4π) · (l-m)!/(l+m)!). No trigonometry is evaluated, and every factor
 // is tabulated once; forward recursion in l is the stable direction for l <= 9.
-#include "prt/sh.h"
+#include "prtsub/prt/sh.h"
 
 #include <array>
 #include <cassert>

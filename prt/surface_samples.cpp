@@ -7,12 +7,12 @@
 // face the n points are a Fibonacci rank-1 lattice in the unit square, shifted by one seeded
 // random vector and folded onto the triangle: each point is uniform on the face, and the set
 // covers it evenly, so a face's samples do not clump as independent ones would.
-#include "prt/surface_samples.h"
+#include "prtsub/prt/surface_samples.h"
 
 #include <cmath>
 
-#include "prt/sampling.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/sampling.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 

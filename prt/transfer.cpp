@@ -23,20 +23,20 @@
 // Points can also be traced in consecutive groups that a callback consumes as soon as a group is
 // done (shadowed_transfer_groups): the fit reduces each group of surface samples to its face's
 // moments and never stores per-sample transfer. A group is traced by one thread, in order.
-#include "prt/transfer.h"
+#include "prtsub/prt/transfer.h"
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <unordered_map>
 
-#include "prt/parallel.h"
-#include "prt/sampling.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/parallel.h"
+#include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
 namespace {
@@ -77,18 +77,14 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
 
 inline bool occluded(const RTCRay& r) { return r.tfar == -std::numeric_limits<float>::infinity(); }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 void check_transfer_options(const TransferOptions& o) {
   if (o.order < 1 || o.order > kMaxShOrder)
-    throw InputError("--order must be between 1 and " + std::to_string(kMaxShOrder) + ", got " + std::to_string(o.order));
+    throw InputError("SH order must be between 1 and " + std::to_string(kMaxShOrder) + ", got " + std::to_string(o.order));
   if (o.rays < 1 || o.rays > (1 << 20))
-    throw InputError("--rays must be between 1 and 1048576, got " + std::to_string(o.rays));
-  if (o.threads < 0) throw InputError("--threads must be 0 (all cores) or more, got " + std::to_string(o.threads));
+    throw InputError("rays per point must be between 1 and 1048576, got " + std::to_string(o.rays));
+  if (o.threads < 0) throw InputError("thread count must be 0 (every core) or more, got " + std::to_string(o.threads));
 }
 
 namespace {
@@ -127,11 +123,11 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
   }
 }
 
-void finish_stats(const RayScene& scene, TransferStats* stats, std::chrono::steady_clock::time_point t0, Eigen::Index points,
+void finish_stats(const RayScene& scene, TransferStats* stats, const Stopwatch& clock, Eigen::Index points,
                   int rays) {
   scene.check("tracing transfer rays");
   if (stats) {
-    stats->seconds = seconds_since(t0);
+    stats->seconds = clock.total();
     stats->rays = static_cast<uint64_t>(points) * static_cast<uint64_t>(rays);
   }
 }
@@ -144,14 +140,14 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
   check_transfer_options(opt);
   const Eigen::Index P = points.rows();
   RowMatrixXd out(P, sh_count(opt.order));
-  auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   parallel_range(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i)
       point_transfer(scene, points, normals, offsets, i, opt, buf, out.row(i).data());
     if (progress) progress(static_cast<size_t>(range.size()));
   });
-  finish_stats(scene, stats, t0, P, opt.rays);
+  finish_stats(scene, stats, clock, P, opt.rays);
   return out;
 }
 
@@ -167,7 +163,7 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
   const int K = sh_count(opt.order);
   // About kGrain points per task, whatever the groups' sizes.
   const Eigen::Index grain = std::max<Eigen::Index>(1, G > 0 ? kGrain * G / std::max<Eigen::Index>(P, 1) : 1);
-  auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   parallel_range(G, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     thread_local std::vector<double> values;
@@ -182,7 +178,7 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
     }
     if (progress) progress(done);
   });
-  finish_stats(scene, stats, t0, P, opt.rays);
+  finish_stats(scene, stats, clock, P, opt.rays);
 }
 
 uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
@@ -190,7 +186,7 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
                              TransferStats* stats, const RowMatrixX3d* offsets) {
   check_transfer_options(opt);
   std::atomic<uint64_t> hits{0};
-  auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   parallel_range(points.rows(), opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     uint64_t local = 0;
@@ -202,7 +198,7 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
   });
   scene.check("tracing benchmark rays");
   if (stats) {
-    stats->seconds = seconds_since(t0);
+    stats->seconds = clock.total();
     stats->rays = static_cast<uint64_t>(points.rows()) * static_cast<uint64_t>(opt.rays);
   }
   return hits.load();

@@ -5,7 +5,7 @@
 #include <functional>
 #include <vector>
 
-#include "prt/ray_scene.h"
+#include "prtsub/prt/ray_scene.h"
 
 namespace prtsub {
 

@@ -1,4 +1,6 @@
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
+
+#include "prtsub/subdiv/adjacency.h"
 
 #include <algorithm>
 
@@ -22,34 +24,16 @@ double triangle_area(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const E
 }
 
 EdgeCounts count_edges(const std::vector<Triangle>& triangles) {
-  // Sort directed half-edges by their undirected key; each run is one edge.
-  struct HalfEdge {
-    uint64_t key;
-    bool forward;
-  };
-  std::vector<HalfEdge> half;
-  half.reserve(triangles.size() * 3);
-  for (const Triangle& t : triangles) {
-    for (int k = 0; k < 3; ++k) {
-      uint32_t a = t[k], b = t[(k + 1) % 3];
-      if (a == b) continue;
-      uint32_t lo = std::min(a, b), hi = std::max(a, b);
-      half.push_back({(uint64_t(lo) << 32) | hi, a < b});
-    }
-  }
-  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.key < y.key || (x.key == y.key && x.forward < y.forward);
-  });
+  const EdgeAdjacency adj = edge_adjacency(triangles);
   EdgeCounts counts;
-  for (size_t i = 0; i < half.size();) {
-    size_t j = i;
-    while (j < half.size() && half[j].key == half[i].key) ++j;
-    size_t n = j - i;
-    ++counts.edges;
+  counts.edges = adj.num_edges();
+  for (size_t e = 0; e < adj.num_edges(); ++e) {
+    const uint32_t n = adj.valence(e);
     if (n == 1) ++counts.boundary;
     if (n > 2) ++counts.non_manifold;
-    if (n == 2 && half[i].forward == half[i + 1].forward) ++counts.winding_conflicts;
-    i = j;
+    // Two faces that agree in winding run the edge in opposite directions: different tails.
+    const uint32_t* h = adj.edge_begin(e);
+    if (n == 2 && half_edge_tail(triangles, h[0]) == half_edge_tail(triangles, h[1])) ++counts.winding_conflicts;
   }
   return counts;
 }

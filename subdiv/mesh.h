@@ -21,6 +21,9 @@ using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen:
 using RowMatrixX2d = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
 using Triangle = std::array<uint32_t, 3>;
 
+//! Computed normals: edges whose faces meet at a sharper angle are creases.
+constexpr double kDefaultCreaseAngleDeg = 60.0;
+
 //! Defects found while loading; tolerated, counted, and reported in every summary.
 struct MeshDefects {
   size_t degenerate_faces = 0;       //!< faces with a repeated index after welding (dropped)
@@ -49,6 +52,7 @@ struct Mesh {
   size_t input_triangles = 0;            //!< triangles in the input after triangulation
   size_t input_vertices = 0;             //!< vertices as the file lists them
   bool normals_from_file = false;
+  double crease_angle_deg = kDefaultCreaseAngleDeg;  //!< the crease angle computed normals used
   MeshDefects defects;
 
   bool has_uv() const { return uv.rows() > 0; }

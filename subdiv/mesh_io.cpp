@@ -9,7 +9,7 @@
 // Welding is by exact position (+0 and -0 are equal). Render vertices are keyed by
 // (welded position, normal): with file normals, by the normal's exact value; otherwise by the
 // crease-aware smoothing group of compute_corner_normals.
-#include "subdiv/mesh_io.h"
+#include "prtsub/subdiv/mesh_io.h"
 
 #include <algorithm>
 #include <charconv>
@@ -17,9 +17,9 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "subdiv/exceptions.h"
-#include "subdiv/normals.h"
-#include "subdiv/ply.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/normals.h"
+#include "prtsub/subdiv/ply.h"
 
 namespace prtsub {
 namespace {
@@ -331,7 +331,10 @@ RawMesh parse_ply_mesh(const std::string& bytes, const std::string& path) {
   return raw;
 }
 
-Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& options) {
+namespace {
+
+// Every check that does not depend on welding: counts, finite values, indices in range.
+void validate_raw(const RawMesh& raw, const std::string& path) {
   const size_t nin = static_cast<size_t>(raw.positions.rows());
   const size_t nfaces_in = raw.face_offsets.empty() ? 0 : raw.face_offsets.size() - 1;
   if (nin == 0) throw InputError(path + ": empty mesh (no vertices)");
@@ -347,22 +350,20 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
         throw InputError(path + ": face " + std::to_string(f) + " refers to vertex " +
                          std::to_string(raw.face_indices[c]) + ", but the file has " +
                          std::to_string(nin) + " vertices (0-based)");
-  const bool per_vertex_normals = raw.corner_normals.empty() && raw.normals.rows() == raw.positions.rows();
-  const bool per_corner_normals = !raw.corner_normals.empty();
-  const bool per_corner_uv = !raw.corner_texcoords.empty();
-  const bool per_vertex_uv = !per_corner_uv && raw.texcoords.rows() > 0;
+  const bool per_vertex_uv = raw.corner_texcoords.empty() && raw.texcoords.rows() > 0;
   if (per_vertex_uv && raw.texcoords.rows() != raw.positions.rows())
     throw InputError(path + ": " + std::to_string(raw.texcoords.rows()) + " texture coordinates for " +
                      std::to_string(raw.positions.rows()) + " vertices");
   for (Eigen::Index i = 0; i < raw.texcoords.rows(); ++i)
     if (!raw.texcoords.row(i).allFinite())
       throw InputError(path + ": texture coordinate " + std::to_string(i) + " is not finite");
+}
 
-  Mesh mesh;
-  mesh.input_vertices = nin;
+// Welds referenced vertices by exact position, in input order, into mesh.positions; returns
+// each input vertex's welded index (UINT32_MAX for unreferenced ones).
+std::vector<uint32_t> weld_positions(const RawMesh& raw, const std::string& path, Mesh& mesh) {
+  const size_t nin = static_cast<size_t>(raw.positions.rows());
   MeshDefects& d = mesh.defects;
-
-  // Weld referenced vertices by exact position, in input order.
   std::vector<char> referenced(nin, 0);
   for (int64_t i : raw.face_indices) referenced[static_cast<size_t>(i)] = 1;
   std::vector<uint32_t> weld(nin, UINT32_MAX);
@@ -385,13 +386,21 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
     weld[i] = it->second;
   }
   mesh.positions = to_matrix(welded);
-  if (mesh.positions.rows() > UINT32_MAX / 4)
-    throw InputError(path + ": too many vertices for 32-bit indices");
+  if (mesh.positions.rows() > UINT32_MAX / 4) throw InputError(path + ": too many vertices for 32-bit indices");
+  return weld;
+}
 
-  // Fan-triangulate; keep, per kept triangle, its input corners (for file normals).
-  std::vector<Triangle> tri_pos;                // welded position indices
-  std::vector<std::array<size_t, 3>> tri_corner;  // corner slots in raw.face_indices
-  for (size_t f = 0; f < nfaces_in; ++f) {
+// Triangles over welded positions, each with its input corners (for file normals and UVs).
+struct PositionTriangles {
+  std::vector<Triangle> tri;                     // welded position indices
+  std::vector<std::array<size_t, 3>> corner;     // corner slots in raw.face_indices
+};
+
+// Fan-triangulates, drops faces that collapse, and numbers source faces.
+PositionTriangles triangulate(const RawMesh& raw, const std::vector<uint32_t>& weld, const std::string& path, Mesh& mesh) {
+  MeshDefects& d = mesh.defects;
+  PositionTriangles out;
+  for (size_t f = 0; f + 1 < raw.face_offsets.size(); ++f) {
     size_t b = raw.face_offsets[f], n = raw.face_offsets[f + 1] - b;
     if (n < 3) {
       ++d.degenerate_faces;
@@ -407,14 +416,18 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
         ++d.degenerate_faces;
         continue;
       }
-      tri_pos.push_back(t);
-      tri_corner.push_back(c);
+      out.tri.push_back(t);
+      out.corner.push_back(c);
       mesh.source_face.push_back(src);
     }
   }
-  if (tri_pos.empty()) throw InputError(path + ": empty mesh (every face is degenerate)");
+  if (out.tri.empty()) throw InputError(path + ": empty mesh (every face is degenerate)");
+  return out;
+}
 
-  // Zero-area and duplicate faces (kept).
+// Zero-area and duplicate faces (both kept) and the edge counts.
+void count_face_defects(const std::vector<Triangle>& tri_pos, Mesh& mesh) {
+  MeshDefects& d = mesh.defects;
   const double diag = bounds(mesh.positions).diagonal();
   const double min_area = (1e-7 * diag) * (1e-7 * diag);
   std::unordered_map<uint64_t, uint32_t> face_seen;  // hash of sorted triple -> first face
@@ -433,62 +446,73 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
       if (o == s) ++d.duplicate_faces;
     }
   }
-  EdgeCounts ec = count_edges(tri_pos);
+  const EdgeCounts ec = count_edges(tri_pos);
   d.boundary_edges = ec.boundary;
   d.non_manifold_edges = ec.non_manifold;
   d.winding_conflicts = ec.winding_conflicts;
+}
 
-  // Render vertices: computed normals everywhere, then file normals where the file has them.
-  CornerNormals computed = compute_corner_normals(mesh.positions, tri_pos, options.crease_angle_deg);
-  struct VertexKey {
-    uint32_t position;
-    uint64_t a, b;  // group id, or the normal's bits
-    uint64_t u = 0, v = 0;  // the UV's bits
-    bool operator==(const VertexKey& o) const {
-      return position == o.position && a == o.a && b == o.b && u == o.u && v == o.v;
-    }
-  };
-  struct VertexHash {
-    size_t operator()(const VertexKey& k) const {
-      return static_cast<size_t>((k.position * 0x9E3779B97F4A7C15ull) ^ (k.a * 0xC2B2AE3D27D4EB4Full) ^ (k.b + 0x165667B19E3779F9ull) ^
-                                 ((k.u * 0x27D4EB2F165667C5ull) + (k.v ^ (k.v >> 31))));
-    }
-  };
-  const bool has_uv = per_corner_uv || per_vertex_uv;
-  std::vector<double> uvs;
+// A render vertex is a position with one normal and one UV: two corners share a render vertex
+// when all three agree, bit for bit (the normal by its smoothing group when computed).
+struct VertexKey {
+  uint32_t position;
+  uint64_t a, b;          // group id, or the normal's bits
+  uint64_t u = 0, v = 0;  // the UV's bits
+  bool operator==(const VertexKey& o) const { return position == o.position && a == o.a && b == o.b && u == o.u && v == o.v; }
+};
+struct VertexHash {
+  size_t operator()(const VertexKey& k) const {
+    return static_cast<size_t>((k.position * 0x9E3779B97F4A7C15ull) ^ (k.a * 0xC2B2AE3D27D4EB4Full) ^ (k.b + 0x165667B19E3779F9ull) ^
+                               ((k.u * 0x27D4EB2F165667C5ull) + (k.v ^ (k.v >> 31))));
+  }
+};
+
+// The normal of triangle f's corner k: the file's (keyed by its bits) where the file gives a
+// valid one, else the computed smoothing group's.
+Eigen::Vector3d corner_normal(const RawMesh& raw, const PositionTriangles& pt, const CornerNormals& computed, size_t f, int k,
+                              VertexKey& key, Mesh& mesh) {
+  Eigen::Vector3d n = computed.normals.row(computed.group[f * 3 + size_t(k)]).transpose();
+  key.a = 0, key.b = computed.group[f * 3 + size_t(k)];
+  int64_t file_row = -1;
+  if (!raw.corner_normals.empty()) file_row = raw.corner_normals[pt.corner[f][size_t(k)]];
+  else if (raw.normals.rows() == raw.positions.rows()) file_row = raw.face_indices[pt.corner[f][size_t(k)]];
+  if (file_row < 0) return n;
+  const Eigen::Vector3d fn = raw.normals.row(static_cast<Eigen::Index>(file_row)).transpose();
+  const double len = fn.norm();
+  if (!(len > 0 && std::isfinite(len))) {
+    ++mesh.defects.invalid_file_normals;
+    return n;
+  }
+  n = fn / len;
+  std::memcpy(&key.b, &n.x(), 8);
+  uint64_t yz[2];
+  std::memcpy(yz, &n.y(), 8);
+  std::memcpy(yz + 1, &n.z(), 8);
+  key.a = 1 + (yz[0] ^ (yz[1] * 0x9E3779B97F4A7C15ull));
+  mesh.normals_from_file = true;
+  return n;
+}
+
+// Render vertices: computed normals everywhere, then file normals and UVs where the file has them.
+void make_render_vertices(const RawMesh& raw, const PositionTriangles& pt, const LoadOptions& options, Mesh& mesh) {
+  const CornerNormals computed = compute_corner_normals(mesh.positions, pt.tri, options.crease_angle_deg);
+  const bool per_corner_uv = !raw.corner_texcoords.empty();
+  const bool has_uv = per_corner_uv || raw.texcoords.rows() > 0;
+  std::vector<double> uvs, normals;
   std::unordered_map<VertexKey, uint32_t, VertexHash> vertex_of;
-  vertex_of.reserve(tri_pos.size() * 2);
-  std::vector<double> normals;
-  mesh.triangles.resize(tri_pos.size());
-  for (size_t f = 0; f < tri_pos.size(); ++f) {
+  vertex_of.reserve(pt.tri.size() * 2);
+  mesh.triangles.resize(pt.tri.size());
+  for (size_t f = 0; f < pt.tri.size(); ++f) {
     for (int k = 0; k < 3; ++k) {
-      const uint32_t p = tri_pos[f][k];
-      Eigen::Vector3d n = computed.normals.row(computed.group[f * 3 + k]).transpose();
-      VertexKey key{p, 0, computed.group[f * 3 + k]};
-      int64_t file_row = -1;
-      if (per_corner_normals) file_row = raw.corner_normals[tri_corner[f][k]];
-      if (per_vertex_normals) file_row = raw.face_indices[tri_corner[f][k]];
-      if (file_row >= 0) {
-        Eigen::Vector3d fn = raw.normals.row(static_cast<Eigen::Index>(file_row)).transpose();
-        double len = fn.norm();
-        if (len > 0 && std::isfinite(len)) {
-          n = fn / len;
-          key.a = 1;
-          std::memcpy(&key.b, &n.x(), 8);
-          uint64_t yz[2];
-          std::memcpy(yz, &n.y(), 8);
-          std::memcpy(yz + 1, &n.z(), 8);
-          key.a = 1 + (yz[0] ^ (yz[1] * 0x9E3779B97F4A7C15ull));
-          mesh.normals_from_file = true;
-        } else {
-          ++d.invalid_file_normals;
-        }
-      }
+      const uint32_t p = pt.tri[f][size_t(k)];
+      VertexKey key{p, 0, 0};
+      const Eigen::Vector3d n = corner_normal(raw, pt, computed, f, k, key, mesh);
       Eigen::Vector2d uv(0, 0);
       if (has_uv) {
-        const int64_t row = per_corner_uv ? raw.corner_texcoords[tri_corner[f][k]] : raw.face_indices[tri_corner[f][k]];
+        const size_t corner = pt.corner[f][size_t(k)];
+        const int64_t row = per_corner_uv ? raw.corner_texcoords[corner] : raw.face_indices[corner];
         if (row >= 0) uv = raw.texcoords.row(static_cast<Eigen::Index>(row)).transpose();
-        else ++d.corners_without_uv;
+        else ++mesh.defects.corners_without_uv;
         const double u0 = uv.x() == 0.0 ? 0.0 : uv.x(), v0 = uv.y() == 0.0 ? 0.0 : uv.y();  // -0 is 0
         std::memcpy(&key.u, &u0, 8);
         std::memcpy(&key.v, &v0, 8);
@@ -499,7 +523,7 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
         normals.insert(normals.end(), {n.x(), n.y(), n.z()});
         if (has_uv) uvs.insert(uvs.end(), {uv.x(), uv.y()});
       }
-      mesh.triangles[f][k] = it->second;
+      mesh.triangles[f][size_t(k)] = it->second;
     }
   }
   mesh.normals = to_matrix(normals);
@@ -507,6 +531,19 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
     mesh.uv.resize(static_cast<Eigen::Index>(uvs.size() / 2), 2);
     std::memcpy(mesh.uv.data(), uvs.data(), uvs.size() * sizeof(double));
   }
+}
+
+}  // namespace
+
+Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& options) {
+  validate_raw(raw, path);
+  Mesh mesh;
+  mesh.input_vertices = static_cast<size_t>(raw.positions.rows());
+  mesh.crease_angle_deg = options.crease_angle_deg;
+  const std::vector<uint32_t> weld = weld_positions(raw, path, mesh);
+  const PositionTriangles pt = triangulate(raw, weld, path, mesh);
+  count_face_defects(pt.tri, mesh);
+  make_render_vertices(raw, pt, options, mesh);
   return mesh;
 }
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 
@@ -24,7 +24,7 @@ struct RawMesh {
 };
 
 struct LoadOptions {
-  double crease_angle_deg = 60.0;  //!< computed normals: edges sharper than this are creases
+  double crease_angle_deg = kDefaultCreaseAngleDeg;  //!< computed normals: edges sharper than this are creases
 };
 
 //! Reads a mesh file; the format is chosen by the file's extension (case-insensitive).

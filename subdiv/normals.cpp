@@ -7,7 +7,9 @@
 // faces that only touch at a vertex (bow-ties) never share one. The group's normal is the
 // angle-weighted sum of its faces' normals (Thürmer and Wüthrich), which does not depend on
 // how a polygon was triangulated.
-#include "subdiv/normals.h"
+#include "prtsub/subdiv/normals.h"
+
+#include "prtsub/subdiv/adjacency.h"
 
 #include <algorithm>
 #include <cmath>
@@ -51,43 +53,21 @@ CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
     }
   }
 
-  // Half-edges sorted by undirected key: runs of two with opposite direction are manifold.
-  struct HalfEdge {
-    uint64_t key;
-    uint32_t face;
-    uint8_t corner;  // the half-edge runs from corner to corner+1
-  };
-  std::vector<HalfEdge> half;
-  half.reserve(nf * 3);
-  for (uint32_t f = 0; f < nf; ++f)
-    for (uint8_t k = 0; k < 3; ++k) {
-      uint32_t a = triangles[f][k], b = triangles[f][(k + 1) % 3];
-      half.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), f, k});
-    }
-  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.key < y.key || (x.key == y.key && x.face < y.face);
-  });
-
   const double cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0, 180.0) * M_PI / 180.0);
+  const EdgeAdjacency adj = edge_adjacency(triangles);
   UnionFind uf(nf * 3);
-  for (size_t i = 0; i < half.size();) {
-    size_t j = i;
-    while (j < half.size() && half[j].key == half[i].key) ++j;
-    if (j - i == 2) {
-      const HalfEdge &h = half[i], &g = half[i + 1];
-      uint32_t ha = triangles[h.face][h.corner], ga = triangles[g.face][g.corner];
-      bool opposite = ha != ga;
-      const Eigen::Vector3d &nh = face_normal[h.face], &ng = face_normal[g.face];
-      bool degenerate = nh.isZero() || ng.isZero();
-      if (opposite && (degenerate || nh.dot(ng) >= cos_crease)) {
-        // h runs a->b with corners (h.corner, h.corner+1); g runs b->a.
-        uint32_t h0 = h.face * 3 + h.corner, h1 = h.face * 3 + (h.corner + 1) % 3;
-        uint32_t g0 = g.face * 3 + g.corner, g1 = g.face * 3 + (g.corner + 1) % 3;
-        uf.unite(h0, g1);
-        uf.unite(h1, g0);
-      }
+  for (size_t e = 0; e < adj.num_edges(); ++e) {
+    if (adj.valence(e) != 2) continue;  // boundary and non-manifold edges are creases
+    const uint32_t h = adj.edge_begin(e)[0], g = adj.edge_begin(e)[1];
+    const bool opposite = half_edge_tail(triangles, h) != half_edge_tail(triangles, g);
+    const Eigen::Vector3d &nh = face_normal[h / 3], &ng = face_normal[g / 3];
+    const bool degenerate = nh.isZero() || ng.isZero();
+    if (opposite && (degenerate || nh.dot(ng) >= cos_crease)) {
+      // h runs a->b from corner slot h to h's next corner; g runs b->a.
+      const uint32_t h1 = h / 3 * 3 + (h % 3 + 1) % 3, g1 = g / 3 * 3 + (g % 3 + 1) % 3;
+      uf.unite(h, g1);
+      uf.unite(h1, g);
     }
-    i = j;
   }
 
   CornerNormals out;

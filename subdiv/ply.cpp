@@ -1,7 +1,7 @@
 // PLY parsing. The header is read line by line; the body is decoded per element, with every
 // binary read checked against the bytes left so that a truncated or lying header is an error,
 // never an out-of-bounds read or a huge allocation.
-#include "subdiv/ply.h"
+#include "prtsub/subdiv/ply.h"
 
 #include <charconv>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "subdiv/exceptions.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {

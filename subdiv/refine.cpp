@@ -23,14 +23,15 @@
 // first batches on starting keys. Results depend on the batch size but not on threads. The budget is exact except where parity forbids it: a closed surface has
 // 3F = 2E, so F is even, and with no boundary edge left to split an odd budget stops one
 // short (reported as a warning).
-#include "subdiv/refine.h"
+#include "prtsub/subdiv/refine.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
-#include "subdiv/exceptions.h"
-#include "subdiv/indexed_heap.h"
+#include "prtsub/subdiv/adjacency.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/indexed_heap.h"
+#include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
 namespace {
@@ -151,9 +152,9 @@ class Refiner {
       faces[f] = {(pos_[vpos_[t[0]]] + pos_[vpos_[t[1]]] + pos_[vpos_[t[2]]]) / 3, n.normalized(), area(f),
                   &val_[size_t(t[0]) * K_], &val_[size_t(t[1]) * K_], &val_[size_t(t[2]) * K_], K_};
     }
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     signal_.probe_faces(faces, extra_);
-    stats.seconds_signal += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats.seconds_signal += clock.total();
     stats.probed_faces = extra_.size();
   }
 
@@ -188,23 +189,17 @@ class Refiner {
   // boundary, three or more are non-manifold. Splits keep the links up to date, so refinement
   // never looks an edge up by key (a hash lookup per step cost about a third of its time).
   void link_faces() {
-    std::vector<std::pair<uint64_t, uint32_t>> half;
-    half.reserve(tri_.size() * 3);
-    for (uint32_t f = 0; f < tri_.size(); ++f)
-      for (uint32_t k = 0; k < 3; ++k) half.emplace_back(edge_key(pos_of(f, int(k)), pos_of(f, int(k) + 1)), 3 * f + k);
-    std::sort(half.begin(), half.end());
-    link_.assign(half.size(), kBoundary);
-    for (size_t r = 0; r < half.size();) {
-      size_t end = r + 1;
-      while (end < half.size() && half[end].first == half[r].first) ++end;
-      if (end - r == 2) {
-        link_[half[r].second] = half[r + 1].second;
-        link_[half[r + 1].second] = half[r].second;
-      } else if (end - r > 2) {
+    const EdgeAdjacency adj = edge_adjacency(tri_, &vpos_);
+    link_.assign(tri_.size() * 3, kBoundary);
+    for (size_t e = 0; e < adj.num_edges(); ++e) {
+      const uint32_t* h = adj.edge_begin(e);
+      if (adj.valence(e) == 2) {
+        link_[h[0]] = h[1];
+        link_[h[1]] = h[0];
+      } else if (adj.valence(e) > 2) {
         ++non_manifold_edges_;
-        for (size_t i = r; i < end; ++i) link_[half[i].second] = kNonManifold;
+        for (uint32_t i = 0; i < adj.valence(e); ++i) link_[h[i]] = kNonManifold;
       }
-      r = end;
     }
   }
   void pair(uint32_t s, uint32_t t) {
@@ -360,14 +355,14 @@ class Refiner {
 
   void finish_batch(RefineStats& stats) {
     if (pending_.empty()) return;
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     RowMatrixXd parent(static_cast<Eigen::Index>(pending_.size()), K_), out(static_cast<Eigen::Index>(pending_.size()), K_);
     for (size_t i = 0; i < pending_.size(); ++i)
       for (int c = 0; c < K_; ++c) parent(static_cast<Eigen::Index>(i), c) = val_[size_t(pending_[i].index) * K_ + c];
     signal_.compute_values(pending_, parent, out);
     for (size_t i = 0; i < pending_.size(); ++i)
       for (int c = 0; c < K_; ++c) val_[size_t(pending_[i].index) * K_ + c] = out(static_cast<Eigen::Index>(i), c);
-    stats.seconds_signal += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats.seconds_signal += clock.total();
     stats.new_vertices += pending_.size();
     ++stats.batches;
     std::sort(dirty_.begin(), dirty_.end());
@@ -412,7 +407,7 @@ double min_angle_deg(const Mesh& mesh) {
 
 RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& signal, const RefineOptions& options,
                             RowMatrixXd* attributes) {
-  auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   RefineStats stats;
   stats.min_angle_before_deg = min_angle_deg(mesh);
   if (options.budget <= mesh.num_faces()) {
@@ -438,7 +433,7 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
   }
   r.write_back();
   stats.min_angle_after_deg = min_angle_deg(mesh);
-  stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stats.seconds_total = clock.total();
   return stats;
 }
 

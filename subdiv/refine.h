@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 

@@ -4,16 +4,16 @@
 // vertices are a face-varying channel with linear interpolation everywhere, so a crease's two
 // sides refine separately. For Loop, edges on creases are tagged infinitely sharp, so hard
 // edges stay hard.
-#include "subdiv/uniform.h"
+#include "prtsub/subdiv/uniform.h"
 
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 
-#include <map>
 #include <memory>
 
-#include "subdiv/exceptions.h"
-#include "subdiv/mesh_io.h"
+#include "prtsub/subdiv/adjacency.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/mesh_io.h"
 
 namespace prtsub {
 namespace {
@@ -40,11 +40,13 @@ void far_error(Far::ErrorType, const char* message) { throw InputError(std::stri
 UniformScheme parse_uniform_scheme(const std::string& name) {
   if (name == "linear") return UniformScheme::Linear;
   if (name == "loop") return UniformScheme::Loop;
-  throw InputError("--scheme must be linear or loop, got '" + name + "'");
+  throw InputError("unknown uniform scheme '" + name + "' (linear, loop)");
 }
 
+const char* uniform_scheme_name(UniformScheme s) { return s == UniformScheme::Loop ? "loop" : "linear"; }
+
 Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
-  if (opt.levels < 1 || opt.levels > 8) throw InputError("--levels must be between 1 and 8");
+  if (opt.levels < 1 || opt.levels > 8) throw InputError("uniform refinement: levels must be between 1 and 8, got " + std::to_string(opt.levels));
   if (mesh.has_uv() && static_cast<size_t>(mesh.uv.rows()) != mesh.num_vertices())
     throw InputError("refine: the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " + std::to_string(mesh.num_vertices()) + " render vertices");
   const int F = static_cast<int>(mesh.num_faces());
@@ -56,19 +58,21 @@ Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
   std::vector<int> crease_pairs;
   std::vector<float> crease_weights;
   if (opt.scheme == UniformScheme::Loop) {
-    std::map<std::pair<int, int>, std::pair<uint64_t, int>> seen;  // edge -> (render pair, count)
-    for (const Triangle& t : mesh.triangles)
-      for (int k = 0; k < 3; ++k) {
-        uint32_t a = t[k], b = t[(k + 1) % 3];
-        int pa = static_cast<int>(mesh.vertex_position[a]), pb = static_cast<int>(mesh.vertex_position[b]);
-        auto key = std::minmax(pa, pb);
-        uint64_t render = pa < pb ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
-        auto [it, inserted] = seen.emplace(key, std::make_pair(render, 1));
-        if (!inserted && ++it->second.second == 2 && it->second.first != render) {
-          crease_pairs.push_back(key.first), crease_pairs.push_back(key.second);
-          crease_weights.push_back(Sdc::Crease::SHARPNESS_INFINITE);
-        }
-      }
+    const EdgeAdjacency adj = edge_adjacency(mesh.triangles, &mesh.vertex_position);
+    // The render vertices at the lower and the higher position of half-edge h.
+    auto render_pair = [&](uint32_t h) {
+      const uint32_t a = half_edge_tail(mesh.triangles, h), b = half_edge_head(mesh.triangles, h);
+      return mesh.vertex_position[a] < mesh.vertex_position[b] ? std::make_pair(a, b) : std::make_pair(b, a);
+    };
+    for (size_t e = 0; e < adj.num_edges(); ++e) {
+      if (adj.valence(e) < 2) continue;
+      const uint32_t* h = adj.edge_begin(e);
+      if (render_pair(h[0]) == render_pair(h[1])) continue;
+      const uint32_t a = mesh.vertex_position[half_edge_tail(mesh.triangles, h[0])];
+      const uint32_t b = mesh.vertex_position[half_edge_head(mesh.triangles, h[0])];
+      crease_pairs.push_back(static_cast<int>(std::min(a, b))), crease_pairs.push_back(static_cast<int>(std::max(a, b)));
+      crease_weights.push_back(Sdc::Crease::SHARPNESS_INFINITE);
+    }
   }
 
   Far::TopologyDescriptor desc;
@@ -145,7 +149,7 @@ Mesh refine_uniform(const Mesh& mesh, const UniformOptions& opt) {
       raw.texcoords.resize(last.GetNumFVarValues(0), 2);
       for (int i = 0; i < last.GetNumFVarValues(0); ++i) raw.texcoords.row(i) << usrc[i].u, usrc[i].v;
     }
-    Mesh out = build_mesh(raw, "loop subdivision", LoadOptions{opt.crease_angle_deg});
+    Mesh out = build_mesh(raw, "loop subdivision", LoadOptions{mesh.crease_angle_deg});
     for (uint32_t& s : out.source_face) s = source[s];
     out.input_triangles = mesh.input_triangles;
     out.input_vertices = mesh.input_vertices;

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "subdiv/mesh.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 
@@ -16,7 +16,6 @@ enum class UniformScheme {
 struct UniformOptions {
   int levels = 1;
   UniformScheme scheme = UniformScheme::Linear;
-  double crease_angle_deg = 60;  //!< Loop only: normals of the smoothed surface are recomputed
 };
 
 //! Refines every face `levels` times (F·4^levels faces). Linear keeps the geometry and
@@ -25,6 +24,7 @@ struct UniformOptions {
 //! \throw InputError if OpenSubdiv rejects the topology or levels is out of 1..8
 Mesh refine_uniform(const Mesh& mesh, const UniformOptions& options);
 
-UniformScheme parse_uniform_scheme(const std::string& name);
+UniformScheme parse_uniform_scheme(const std::string& name);  //!< linear, loop \throw InputError
+const char* uniform_scheme_name(UniformScheme s);
 
 }  // namespace prtsub

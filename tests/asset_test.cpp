@@ -1,4 +1,4 @@
-#include "prt/asset.h"
+#include "prtsub/prt/asset.h"
 
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 #include <fstream>
 
 #include "helpers.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
-#include "subdiv/ply.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/ply.h"
 
 namespace prtsub {
 namespace {

@@ -1,11 +1,11 @@
-#include "prt/block_cg.h"
+#include "prtsub/prt/block_cg.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <vector>
 
-#include "prt/sampling.h"
+#include "prtsub/prt/sampling.h"
 
 namespace prtsub {
 namespace {

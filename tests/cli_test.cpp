@@ -6,10 +6,10 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "helpers.h"
-#include "prt/asset.h"
-#include "prt/sh.h"
-#include "subdiv/ply.h"
+#include "cli_helpers.h"
+#include "prtsub/prt/asset.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/ply.h"
 
 namespace prtsub {
 namespace {
@@ -211,9 +211,9 @@ TEST_F(Cli, RenderRejectsBadLightsCamerasAndSizesWithoutOutput) {
   testing::internal::GetCapturedStdout();
   const size_t before = files();
   testing::internal::CaptureStderr();
-  EXPECT_EQ(run({"render", asset, "--light", "moon:1", "-o", dir.path("f.exr")}), 1);
+  EXPECT_EQ(run({"render", asset, "--light", "moon:1", "-o", dir.path("f.exr")}), 2);
   EXPECT_EQ(run({"render", asset, "--light", "env:" + dir.path("nope.exr"), "-o", dir.path("f.exr")}), 1);
-  EXPECT_EQ(run({"render", asset, "--light", "sky", "--camera", "eye=1,1,1", "-o", dir.path("f.exr")}), 1);
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "--camera", "eye=1,1,1", "-o", dir.path("f.exr")}), 2);
   EXPECT_EQ(run({"render", asset, "--light", "sky", "--size", "0,10", "-o", dir.path("f.exr")}), 2);
   EXPECT_EQ(run({"render", asset, "--light", "sky", "-o", dir.path("f.tga")}), 1);
   EXPECT_EQ(run({"render", asset, "-o", dir.path("f.exr")}), 2);
@@ -262,9 +262,53 @@ TEST_F(Cli, EvalAndCompareWriteTheirTablesAndReports) {
   testing::internal::CaptureStderr();
   EXPECT_EQ(run({"compare", in, "--budgets", "300,x", "-o", dir.path("c2")}), 2);
   EXPECT_EQ(run({"bake", in, "-o", dir.path("z.ply"), "--refine", "adaptive"}), 2);
-  EXPECT_EQ(run({"bake", in, "-o", dir.path("z.ply"), "--refine", "sideways"}), 1);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("z.ply"), "--refine", "sideways"}), 2);
   EXPECT_EQ(run({"eval", asset}), 2);
   testing::internal::GetCapturedStderr();
+}
+
+// Every usage mistake: exit 2, one line on stderr that names the option, and no file written.
+TEST_F(Cli, EveryUsageMistakeExitsTwoWithOneLineNamingTheOption) {
+  const std::string in = scene(), asset = dir.path("a.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "4"}), 0);
+  testing::internal::GetCapturedStdout();
+  const std::string out = dir.path("out.ply"), frame = dir.path("f.exr");
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"--estimate", {"bake", in, "-o", out, "--refine", "adaptive", "--budget", "100", "--estimate", "best"}},
+      {"--scheme", {"bake", in, "-o", out, "--refine", "uniform", "--scheme", "x"}},
+      {"--refine", {"bake", in, "-o", out, "--refine", "sideways"}},
+      {"--signal", {"bake", in, "-o", out, "--signal", "light"}},
+      {"--fit", {"bake", in, "-o", out, "--fit", "spline"}},
+      {"--regularizer", {"bake", in, "-o", out, "--regularizer", "laplace"}},
+      {"--mass", {"bake", in, "-o", out, "--mass", "lumped"}},
+      {"--solver", {"bake", in, "-o", out, "--solver", "qr"}},
+      {"--budget", {"bake", in, "-o", out, "--refine", "adaptive"}},
+      {"--levels", {"bake", in, "-o", out, "--refine", "uniform", "--levels", "9"}},
+      {"--order", {"bake", in, "-o", out, "--order", "11"}},
+      {"--light", {"render", asset, "--light", "moon:1", "-o", frame}},
+      {"--light", {"render", asset, "--light", "sun:0,0,0", "-o", frame}},
+      {"--light", {"render", asset, "--light", "sh:1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17", "-o", frame}},
+      {"--camera", {"render", asset, "--light", "sky", "--camera", "eye=1,1,1", "-o", frame}},
+      {"--camera", {"render", asset, "--light", "sky", "--camera", "eye=1,1,1:target=1,1,1", "-o", frame}},
+      {"--light-rotate", {"render", asset, "--light", "sky", "--light-rotate", "q,3", "-o", frame}},
+      {"--size", {"render", asset, "--light", "sky", "--size", "0,10", "-o", frame}},
+      {"--at", {"bench", in, "--at", "edges"}},
+      {"--estimates", {"compare", in, "--budgets", "300", "--estimates", "root,best", "-o", dir.path("c")}},
+      {"--frame-size", {"compare", in, "--budgets", "300", "--frame-size", "1", "-o", dir.path("c")}},
+      {"--light", {"compare", in, "--budgets", "300", "--light", "moon:1", "-o", dir.path("c")}},
+  };
+  const size_t before = files();
+  for (const auto& [option, args] : cases) {
+    testing::internal::CaptureStderr();
+    const int status = run(args);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(status, 2) << option << ": " << err;
+    EXPECT_EQ(err.rfind("prtsub: error: ", 0), 0u) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find(option), std::string::npos) << option << " not named in: " << err;
+  }
+  EXPECT_EQ(files(), before);
 }
 
 }  // namespace

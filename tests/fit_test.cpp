@@ -1,4 +1,4 @@
-#include "prt/fit.h"
+#include "prtsub/prt/fit.h"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <functional>
 
 #include "helpers.h"
-#include "subdiv/exceptions.h"
-#include "prt/sampling.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/prt/sampling.h"
 
 namespace prtsub {
 namespace {

@@ -1,7 +1,5 @@
 #include "helpers.h"
 
-#include "cli/commands.h"
-
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -149,13 +147,6 @@ void write_text(const std::string& path, const std::string& text) {
   out << text;
 }
 
-int run_prtsub(std::vector<std::string> args) {
-  args.insert(args.begin(), "prtsub");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  return run_cli(static_cast<int>(argv.size()), argv.data());
-}
-
 std::string shared_scenes() {
   std::string dir = PRTSUB_SHARED_SCENES;
   return std::filesystem::is_directory(dir) ? dir : "";
@@ -163,7 +154,7 @@ std::string shared_scenes() {
 
 }  // namespace prtsub::test
 
-#include "prt/sampling.h"
+#include "prtsub/subdiv/random.h"
 
 namespace prtsub::test {
 

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "subdiv/mesh_io.h"
+#include "prtsub/subdiv/mesh_io.h"
 
 namespace prtsub::test {
 
@@ -43,9 +43,6 @@ bool file_exists(const std::string& path);
 void write_text(const std::string& path, const std::string& text);
 //! Directory of ../shared/scenes, or "" when this clone has none.
 std::string shared_scenes();
-
-//! Runs a prtsub command line in-process ("prtsub" is prepended); returns its exit status.
-int run_prtsub(std::vector<std::string> args);
 
 }  // namespace prtsub::test
 

@@ -1,4 +1,4 @@
-#include "subdiv/mesh_io.h"
+#include "prtsub/subdiv/mesh_io.h"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <fstream>
 
 #include "helpers.h"
-#include "prt/sampling.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/subdiv/random.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {

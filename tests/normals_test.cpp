@@ -1,4 +1,4 @@
-#include "subdiv/normals.h"
+#include "prtsub/subdiv/normals.h"
 
 #include <gtest/gtest.h>
 

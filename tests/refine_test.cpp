@@ -1,4 +1,4 @@
-#include "subdiv/refine.h"
+#include "prtsub/subdiv/refine.h"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,7 @@
 #include <set>
 
 #include "helpers.h"
-#include "subdiv/indexed_heap.h"
-#include "prt/sampling.h"
+#include "prtsub/subdiv/random.h"
 
 namespace prtsub {
 namespace {
@@ -59,21 +58,6 @@ RawMesh grid(int n) {
       g.face_offsets.push_back(g.face_indices.size());
     }
   return g;
-}
-
-TEST(IndexedHeap, PopsByKeyThenIdAndSupportsUpdateAndRemove) {
-  IndexedHeap<std::pair<double, double>> h;
-  h.push(3, {1, 0});
-  h.push(1, {5, 0});
-  h.push(7, {5, 0});
-  h.push(2, {0, 9});
-  h.push(3, {6, 0});  // update up
-  h.push(1, {-1, 0});  // update down
-  h.remove(7);
-  h.remove(42);  // absent: no-op
-  std::vector<uint32_t> order;
-  while (!h.empty()) order.push_back(h.pop());
-  EXPECT_EQ(order, (std::vector<uint32_t>{3, 2, 1}));
 }
 
 TEST(Refine, ClosedMeshStaysConformingWithExactBudgetAndArea) {

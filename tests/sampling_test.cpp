@@ -1,4 +1,4 @@
-#include "prt/sampling.h"
+#include "prtsub/prt/sampling.h"
 
 #include <gtest/gtest.h>
 

@@ -9,12 +9,12 @@
 #include <map>
 
 #include "cli/commands.h"
-#include "helpers.h"
-#include "prt/asset.h"
-#include "subdiv/ply.h"
-#include "subdiv/refine.h"
-#include "prt/transfer.h"
-#include "subdiv/mesh_io.h"
+#include "cli_helpers.h"
+#include "prtsub/prt/asset.h"
+#include "prtsub/subdiv/ply.h"
+#include "prtsub/subdiv/refine.h"
+#include "prtsub/prt/transfer.h"
+#include "prtsub/subdiv/mesh_io.h"
 
 namespace prtsub {
 namespace {

@@ -1,4 +1,4 @@
-#include "prt/sh.h"
+#include "prtsub/prt/sh.h"
 
 #include <gtest/gtest.h>
 

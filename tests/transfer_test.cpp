@@ -1,14 +1,14 @@
-#include "prt/transfer.h"
+#include "prtsub/prt/transfer.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "cli/pipeline.h"
+#include "prtsub/prt/bake.h"
 #include "helpers.h"
-#include "prt/fit.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
+#include "prtsub/prt/fit.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {

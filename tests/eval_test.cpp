@@ -1,83 +1,21 @@
+#include "prtsub/prt/evaluate.h"
+
 #include <gtest/gtest.h>
 
-#include "cli/pipeline.h"
 #include "helpers.h"
-#include "prt/evaluate.h"
-#include "prt/refine_signal.h"
-#include "prt/sh.h"
-#include "subdiv/exceptions.h"
-#include "subdiv/uniform.h"
+#include "prtsub/prt/bake.h"
+#include "prtsub/prt/refine_signal.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {
 
-double area_of(const Mesh& m) {
-  double a = 0;
-  for (const Triangle& t : m.triangles) a += triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
-  return a;
-}
-
-TEST(Uniform, LinearSplitKeepsTheSurfaceAndCarriesSourceFaces) {
-  Mesh m = test::build(test::icosphere(1));
-  Mesh u = refine_uniform(m, UniformOptions{2, UniformScheme::Linear, 60});
-  EXPECT_EQ(u.num_faces(), 80u * 16);
-  EXPECT_NEAR(area_of(u), area_of(m), 1e-12 * area_of(m));
-  std::vector<Triangle> pos(u.num_faces());
-  for (size_t f = 0; f < pos.size(); ++f)
-    for (int k = 0; k < 3; ++k) pos[f][k] = u.vertex_position[u.triangles[f][k]];
-  EXPECT_EQ(count_edges(pos).boundary, 0u);
-  // Every refined face lies inside its source face: its centroid is in that face's plane.
-  for (size_t f = 0; f < u.num_faces(); ++f) {
-    const Triangle& s = m.triangles[u.source_face[f]];
-    Eigen::Vector3d a = m.point(s[0]), n = (m.point(s[1]) - a).cross(m.point(s[2]) - a).normalized();
-    Eigen::Vector3d c = (u.point(u.triangles[f][0]) + u.point(u.triangles[f][1]) + u.point(u.triangles[f][2])) / 3;
-    EXPECT_NEAR(n.dot(c - a), 0, 1e-12);
-  }
-}
-
-TEST(Uniform, CreasesRefinePerSideAndLoopSmooths) {
-  Mesh cube = test::build(test::cube(), 60);
-  Mesh u = refine_uniform(cube, UniformOptions{2, UniformScheme::Linear, 60});
-  EXPECT_EQ(u.num_faces(), 12u * 16);
-  for (const Triangle& t : u.triangles) {
-    Eigen::Vector3d fn = (u.point(t[1]) - u.point(t[0])).cross(u.point(t[2]) - u.point(t[0])).normalized();
-    for (uint32_t c : t) EXPECT_NEAR(fn.dot(u.normals.row(c)), 1.0, 1e-9);
-  }
-  Mesh sphere = test::build(test::icosphere(1));
-  Mesh loop = refine_uniform(sphere, UniformOptions{1, UniformScheme::Loop, 60});
-  EXPECT_EQ(loop.num_faces(), 320u);
-  double moved = 0;
-  for (Eigen::Index p = 0; p < loop.positions.rows(); ++p) moved = std::max(moved, std::abs(loop.positions.row(p).norm() - 1));
-  EXPECT_GT(moved, 1e-3);  // Loop pulls midpoints off the flat faces
-}
-
-TEST(Uniform, UvsAreInterpolatedPerSideOfASeam) {
-  const Mesh m = build_mesh(parse_obj(test::seam_square_obj(), "seam.obj"), "seam.obj");
-  const Mesh u = refine_uniform(m, UniformOptions{2, UniformScheme::Linear, 60});
-  ASSERT_EQ(static_cast<size_t>(u.uv.rows()), u.num_vertices());
-  for (size_t f = 0; f < u.num_faces(); ++f)
-    for (uint32_t c : u.triangles[f])
-      EXPECT_LT((u.uv.row(c).transpose() - test::seam_uv(int(u.source_face[f]), u.point(c))).norm(), 1e-12);
-  // Loop moves positions, not UVs: they are still each side's linear interpolation, so they stay
-  // inside the hull of the side's input UVs.
-  const Mesh loop = refine_uniform(m, UniformOptions{1, UniformScheme::Loop, 60});
-  ASSERT_EQ(static_cast<size_t>(loop.uv.rows()), loop.num_vertices());
-  EXPECT_TRUE(loop.uv.allFinite());
-  EXPECT_GE(loop.uv.minCoeff(), 0.0);
-  EXPECT_LE(loop.uv.maxCoeff(), 1.0);
-  EXPECT_GT(loop.num_vertices(), static_cast<size_t>(loop.positions.rows()));  // the seam survives
-}
-
 TEST(Estimates, ClosedForms) {
   double a[2] = {3, 4}, b[2] = {0, 0}, c[2] = {3, 4};
   EdgeView e{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 1, 0), a, b, 2};
-  RayScene scene(test::build(test::cube()).positions, position_triangles(test::build(test::cube())));
-  auto err = [&](EdgeEstimate est, const EdgeView& v) {
-    TransferSignalOptions o;
-    o.estimate = est;
-    o.curvature_guard_deg = 10;
-    return TransferSignal(scene, o).edge_error(v);
-  };
+  // The formulas alone: no ray scene, no transfer.
+  auto err = [](EdgeEstimate est, const EdgeView& v) { return edge_estimate(est, v, 10); };
   EXPECT_DOUBLE_EQ(err(EdgeEstimate::Shadow, e), 5.0);
   EXPECT_DOUBLE_EQ(err(EdgeEstimate::Length, e), 10.0);
   EXPECT_DOUBLE_EQ(err(EdgeEstimate::Probe, e), 10.0);
@@ -92,6 +30,13 @@ TEST(Estimates, ClosedForms) {
   for (EdgeEstimate est : {EdgeEstimate::Relative, EdgeEstimate::Shadow, EdgeEstimate::Curvature, EdgeEstimate::Length,
                            EdgeEstimate::Probe, EdgeEstimate::Root})
     EXPECT_EQ(err(est, same), 0.0);
+  EXPECT_NEAR(edge_estimate(EdgeEstimate::Curvature, flat, 20), 5.0 / (20 * M_PI / 180), 1e-12);
+  // A probe: its distance from the corners' mean, in the unit of the edges' estimate.
+  const double corner[2] = {0, 0}, probed[2] = {3, 4};
+  const FaceProbe face{Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 12.0, corner, corner, corner, 2};
+  EXPECT_DOUBLE_EQ(probe_estimate(EdgeEstimate::Probe, face, probed), 5.0 * 6.0);  // √(3·12) = 6
+  EXPECT_DOUBLE_EQ(probe_estimate(EdgeEstimate::Root, face, probed), 5.0 * std::sqrt(6.0));
+  EXPECT_EQ(probe_estimate(EdgeEstimate::Length, face, probed), 0.0);
   EXPECT_EQ(parse_estimate("root"), EdgeEstimate::Root);
   EXPECT_STREQ(estimate_name(EdgeEstimate::Root), "root");
   EXPECT_THROW(parse_estimate("best"), InputError);
@@ -154,37 +99,21 @@ TEST(Eval, RefinementLowersErrorAndAdaptiveBeatsUniformOnAContactShadow) {
   ReferenceOptions ro;
   ro.points = 4000, ro.rays = 1024, ro.noise_points = 500;
   Reference ref = make_reference(mesh, scene, ro);
-  auto error_of = [&](BakeSettings s) {
-    s.input = src;
+  auto error_of = [&](BakeOptions s) {
     s.transfer.rays = 128;
-    BakeResult r = run_bake(s);
+    BakeResult r = bake(mesh, s);
     return evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, r.transfer).rms_percent;
   };
-  BakeSettings none, u2, u3, adaptive;
-  u2.refine = u3.refine = "uniform";
+  BakeOptions none, u2, u3, adaptive;
+  u2.refine = u3.refine = Refinement::Uniform;
   u2.uniform.levels = 2, u3.uniform.levels = 3;
   const size_t level3 = mesh.num_faces() * 64;
-  adaptive.refine = "adaptive", adaptive.budget = level3;
+  adaptive.refine = Refinement::Adaptive, adaptive.adaptive.budget = level3;
   const double e0 = error_of(none), e2 = error_of(u2), e3 = error_of(u3), ea = error_of(adaptive);
   EXPECT_LT(e2, e0);
   EXPECT_LT(e3, e2);
   EXPECT_LT(ea, e3) << "adaptive " << ea << "% vs uniform " << e3 << "% at " << level3 << " triangles";
   EXPECT_GT(e3 - ea, 3 * ref.noise_floor * 100);  // adaptive's lead is well above the reference's noise
-}
-
-TEST(Bake, AdaptiveRefinementIsIdenticalForAnyThreadCount) {
-  test::TempDir dir;
-  const std::string src = dir.path("scene.obj");
-  test::write_obj(src, test::merge(test::icosphere(1), test::quad(2.5, -1.0, true)));
-  BakeSettings s;
-  s.input = src, s.refine = "adaptive", s.budget = 900, s.batch = 16;
-  s.transfer.rays = 32, s.transfer.threads = 1;
-  BakeResult one = run_bake(s);
-  s.transfer.threads = 2;
-  BakeResult two = run_bake(s);
-  EXPECT_EQ(one.mesh.triangles, two.mesh.triangles);
-  EXPECT_EQ((one.transfer - two.transfer).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ(one.mesh.num_faces(), 900u);
 }
 
 }  // namespace

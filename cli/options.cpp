@@ -1,0 +1,98 @@
+#include "cli/options.h"
+
+#include "prtsub/prt/sh.h"
+
+namespace prtsub {
+
+void add_transfer_options(ArgParser& args, TransferOptions& t, bool with_order) {
+  if (with_order) args.option("--order", "N", "SH order: N bands, N² coefficients", &t.order, 1, kMaxShOrder);
+  args.option("--rays", "R", "rays per point", &t.rays, 1, 1 << 20);
+  args.option("--seed", "S", "random seed; results depend on it, not on threads", &t.seed);
+  args.option("--threads", "T", "worker threads, 0 for every core", &t.threads, 0, 1024);
+}
+
+void add_batch_option(ArgParser& args, RefineOptions& refine) {
+  args.option("--batch", "B", "adaptive: faces split per Embree batch", &refine.batch, size_t(1), size_t(1) << 20);
+}
+
+void add_report_option(ArgParser& args, std::string& path) {
+  args.option("--report", "R.json", "also write the summary's figures as flat JSON", &path);
+}
+
+void BakeCli::add_common(ArgParser& args) {
+  args.positional("INPUT", "mesh file: .obj, .ply (ASCII or binary), .off or .stl", &input);
+  args.option("--crease-angle", "DEG", "computed normals: sharper edges are creases; 0 is flat shading", &load.crease_angle_deg,
+              0.0, 180.0);
+  add_transfer_options(args, bake.transfer);
+  add_report_option(args, report);
+}
+
+void BakeCli::add_fit(ArgParser& args) {
+  FitOptions& f = bake.fit;
+  SampleOptions& s = bake.samples;
+  args.choice("--signal", "what to bake: SH transfer, or ambient occlusion (one ao value)", &bake.signal,
+              {AssetSignal::Transfer, AssetSignal::Ao}, asset_signal_name);
+  args.choice("--fit", "vertex values: traced at the vertex, averaged from surface samples, or the least-squares fit\n"
+              "to them (Kavan et al. 2011)", &f.method, {FitMethod::Point, FitMethod::Average, FitMethod::LeastSquares}, fit_method_name);
+  args.option("--alpha", "A", "lsq: regulariser weight; 0 is the plain least-squares optimum", &f.alpha, 0.0, 1e12);
+  args.choice("--regularizer", "lsq: penalise gradient jumps across edges, or gradients", &f.regularizer,
+              {Regularizer::Edge, Regularizer::Gradient}, regularizer_name);
+  args.choice("--mass", "lsq: exact mass matrix, or the samples' own", &f.mass, {MassMatrix::Analytic, MassMatrix::Sampled},
+              mass_matrix_name);
+  args.choice("--solver", "lsq: conjugate gradients (analytic mass; CHOLMOD if they stall), or always a CHOLMOD\n"
+              "Cholesky factorisation", &f.solver, {FitSolver::Auto, FitSolver::Cholmod}, fit_solver_name);
+  args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"
+            "variate (for comparison; noisier)", &no_control_variate_);
+  args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle", &s.per_triangle, 0.0, 1e6);
+  args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &s.density, 0.0, 1e30);
+  args.option("--min-samples", "M", "fit: samples every triangle gets at least", &s.min_per_triangle, size_t(0), size_t(1) << 20);
+  args.option("--sample-rays", "R", "fit: rays per surface sample", &bake.sample_rays, 1, 1 << 20);
+}
+
+void BakeCli::add_refinement(ArgParser& args) {
+  args.choice("--refine", "refinement", &bake.refine, {Refinement::None, Refinement::Adaptive, Refinement::Uniform},
+              refinement_name);
+  args.option("--budget", "T", "adaptive: output triangle count (required)", &bake.adaptive.budget, size_t(0), size_t(1) << 30);
+  args.choice("--estimate", "adaptive: edge error estimate", &bake.estimate,
+              {EdgeEstimate::Relative, EdgeEstimate::Shadow, EdgeEstimate::Curvature, EdgeEstimate::Length, EdgeEstimate::Probe,
+               EdgeEstimate::Root},
+              estimate_name);
+  args.option("--max-edge", "L", "adaptive: first split edges longer than L (0: off)", &bake.adaptive.max_edge, 0.0, 1e30);
+  add_batch_option(args, bake.adaptive);
+  args.option("--levels", "K", "uniform: 1→4 splits per face", &bake.uniform.levels, 1, 8);
+  args.choice("--scheme", "uniform: linear keeps the surface; loop smooths it", &bake.uniform.scheme,
+              {UniformScheme::Linear, UniformScheme::Loop}, uniform_scheme_name);
+}
+
+BakeOptions BakeCli::options() const {
+  BakeOptions o = bake;
+  o.fit.control_variate = !no_control_variate_;
+  o.source = input;
+  if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw UsageError("--budget: required with --refine adaptive");
+  try {
+    check_bake_options(o);
+  } catch (const InputError& e) {
+    throw UsageError(e.what());
+  }
+  return o;
+}
+
+StageProgress::StageProgress() : enabled_(stderr_is_terminal()) {}
+StageProgress::~StageProgress() { finish(); }
+void StageProgress::finish() {
+  if (current_) current_->finish();
+  current_.reset();
+}
+BakeProgress StageProgress::callbacks() {
+  BakeProgress p;
+  p.stage = [this](const char* stage, size_t total) {
+    finish();
+    current_ = std::make_unique<Progress>(stage, total, enabled_);
+  };
+  p.add = [this](size_t n) {
+    if (current_) current_->add(n);
+  };
+  return p;
+}
+
+}  // namespace prtsub

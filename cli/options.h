@@ -1,0 +1,57 @@
+// Options shared by the commands, declared once each. Every option binds straight to a field of
+// the library's option structs, so each default is the struct's, written once.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "cli/args.h"
+#include "cli/progress.h"
+#include "prtsub/prt/bake.h"
+#include "prtsub/subdiv/mesh_io.h"
+
+namespace prtsub {
+
+//! --order (unless without_order), --rays, --seed, --threads into `transfer`.
+void add_transfer_options(ArgParser& args, TransferOptions& transfer, bool with_order = true);
+
+//! --batch B into `refine.batch` (adaptive refinement's faces per Embree batch).
+void add_batch_option(ArgParser& args, RefineOptions& refine);
+
+//! --report R.json into `path`.
+void add_report_option(ArgParser& args, std::string& path);
+
+//! What every command that bakes declares: the input mesh and how to load it, the transfer, the
+//! signal, the fit and its samples, and the report.
+struct BakeCli {
+  std::string input, report;
+  LoadOptions load;
+  BakeOptions bake;
+  //! The input, --crease-angle, the transfer options and --report.
+  void add_common(ArgParser& args);
+  //! --signal, --fit and every option of the fit and its samples.
+  void add_fit(ArgParser& args);
+  //! --refine and the options of adaptive and uniform refinement.
+  void add_refinement(ArgParser& args);
+  //! The options after parsing: checks them (\throw UsageError naming the option) and fills in
+  //! what derives from others (the source name).
+  BakeOptions options() const;
+
+ private:
+  bool no_control_variate_ = false;
+};
+
+//! One progress line per pipeline stage, on a terminal.
+class StageProgress {
+ public:
+  StageProgress();
+  ~StageProgress();
+  BakeProgress callbacks();
+  void finish();
+
+ private:
+  bool enabled_;
+  std::unique_ptr<Progress> current_;
+};
+
+}  // namespace prtsub

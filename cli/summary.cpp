@@ -1,0 +1,148 @@
+#include "cli/summary.h"
+
+#include <algorithm>
+
+#include "prtsub/prt/sh.h"
+
+namespace prtsub {
+
+void record(Report& r, const MeshDefects& d) {
+  r.set("defects_degenerate_faces", d.degenerate_faces);
+  r.set("defects_zero_area_faces", d.zero_area_faces);
+  r.set("defects_duplicate_faces", d.duplicate_faces);
+  r.set("defects_unreferenced_vertices", d.unreferenced_vertices);
+  r.set("defects_winding_conflicts", d.winding_conflicts);
+  r.set("defects_non_manifold_edges", d.non_manifold_edges);
+  r.set("defects_invalid_file_normals", d.invalid_file_normals);
+  r.set("defects_corners_without_uv", d.corners_without_uv);
+  r.set("welded_vertices", d.welded_vertices);
+  r.set("boundary_edges", d.boundary_edges);
+  r.set("polygons_triangulated", d.polygons_triangulated);
+}
+
+void record(Report& r, const RefineStats& st) {
+  r.set("splits", st.splits);
+  r.set("pre_refinement_splits", st.pre_refinement_splits);
+  r.set("boundary_splits", st.boundary_splits);
+  r.set("new_vertices", st.new_vertices);
+  r.set("batches", st.batches);
+  r.set("non_manifold_edges_kept", st.non_manifold_edges_kept);
+  r.set("min_angle_before_deg", st.min_angle_before_deg);
+  r.set("min_angle_after_deg", st.min_angle_after_deg);
+  r.set("seconds_refine_rays", st.seconds_signal);
+  r.set("seconds_refine_total", st.seconds_total);
+  r.set("refine_overhead_fraction", st.seconds_total > 0 ? (st.seconds_total - st.seconds_signal) / st.seconds_total : 0.0);
+}
+
+void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& data, int sample_rays) {
+  r.set("fit", fit_method_name(o.method));
+  if (o.method == FitMethod::Point) return;
+  r.set("samples", data.samples.size());
+  r.set("sample_rays", sample_rays);
+  if (o.method != FitMethod::LeastSquares) return;
+  r.set("alpha", o.alpha);
+  r.set("regularizer", regularizer_name(o.regularizer));
+  r.set("mass", mass_matrix_name(o.mass));
+  r.set("fit_solver", f.solver);
+  r.set("fit_cg_iterations", f.cg_iterations);
+  // What CG's iterations were: the solution, or the attempt before CHOLMOD took over.
+  if (f.cg_iterations > 0) r.set("fit_cg_note", f.solver == "cg" ? "CG iterations" : "CG iterations first");
+  r.set("fit_unsupported_vertices", f.unsupported);
+  r.set("fit_stabilizer", f.stabilizer);
+  r.set("fit_system_nonzeros", f.system_nonzeros);
+  r.set("fit_factor_nonzeros", f.factor_nonzeros);
+  r.set("solve_memory_mib", f.solve_memory_mib);
+  r.set("seconds_fit_assemble", f.seconds_assemble);
+  r.set("seconds_fit_factor", f.seconds_factor);
+  r.set("seconds_fit_solve", f.seconds_solve);
+}
+
+void record(Report& r, const BakeResult& res, const BakeOptions& o) {
+  const Mesh& mesh = res.mesh;
+  r.set("order", o.signal == AssetSignal::Ao ? 1 : o.transfer.order);
+  r.set("coefficients", o.signal == AssetSignal::Ao ? 1 : sh_count(o.transfer.order));
+  r.set("rays_per_vertex", o.transfer.rays);
+  r.set("seed", o.transfer.seed);
+  r.set("crease_angle", mesh.crease_angle_deg);
+  r.set("refine", refinement_name(o.refine));
+  r.set("triangles_in", mesh.input_triangles);
+  r.set("vertices_in", mesh.input_vertices);
+  r.set("triangles_out", mesh.num_faces());
+  r.set("vertices_out", mesh.num_vertices());
+  r.set("positions_out", static_cast<uint64_t>(mesh.positions.rows()));
+  r.set("normals_from_file", mesh.normals_from_file);
+  r.set("normals", mesh.normals_from_file ? "from file" : "computed");
+  r.set("uvs", mesh.has_uv() ? "; UVs from file" : "");
+  if (o.refine == Refinement::Adaptive) {
+    r.set("budget", o.adaptive.budget);
+    r.set("estimate", estimate_name(o.estimate));
+    r.set("batch", o.adaptive.batch);
+    r.set("max_edge", o.adaptive.max_edge);
+    record(r, res.refine);
+  }
+  if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
+  r.set("signal", asset_signal_name(o.signal));
+  record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
+  if (o.signal == AssetSignal::Ao) r.set("clamped_values", res.clamped);
+  const double trace_seconds = res.seconds_transfer + res.refine.seconds_signal + res.seconds_samples;
+  r.set("rays", res.rays);
+  r.set("seconds_tracing", trace_seconds);
+  r.set("rays_per_second", static_cast<double>(res.rays) / std::max(trace_seconds, 1e-9));
+  r.set("mrays_per_second", static_cast<double>(res.rays) / std::max(trace_seconds, 1e-9) / 1e6);
+  r.set("seconds_bake", res.seconds_total);
+  r.set("seconds_scene", res.seconds_scene);
+  r.set("seconds_transfer", res.seconds_transfer);
+  r.set("seconds_refine", res.seconds_refine);
+  r.set("seconds_samples", res.seconds_samples);
+  r.set("seconds_fit", res.seconds_fit);
+  r.set("warnings", res.warnings.size());
+  record(r, mesh.defects);
+}
+
+void print_bake_summary(const Report& r) {
+  const bool adaptive = r.format("{refine}") == "adaptive", uniform = r.format("{refine}") == "uniform";
+  const bool ao = r.format("{signal}") == "ao";
+  const std::string fit = r.format("{fit}");
+  r.print(stdout,
+          {"prtsub bake: {input} -> {output}", "  input:      {triangles_in} triangles, {vertices_in} vertices",
+           "  output:     {triangles_out} triangles, {vertices_out} vertices ({positions_out} positions; normals {normals}{uvs})",
+           "  tolerated:  {defects_degenerate_faces} degenerate faces dropped, {defects_zero_area_faces} zero-area faces, "
+           "{defects_duplicate_faces} duplicate faces,",
+           "              {defects_unreferenced_vertices} unreferenced vertices dropped, {defects_winding_conflicts} winding "
+           "conflicts, {defects_non_manifold_edges} non-manifold edges,",
+           "              {defects_invalid_file_normals} invalid file normals, {defects_corners_without_uv} corners without UVs (0, 0)",
+           "  topology:   {boundary_edges} boundary edges, {welded_vertices} vertices welded, {polygons_triangulated} polygons "
+           "triangulated"});
+  if (adaptive)
+    r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
+                     "{pre_refinement_splits} pre-refinement) in {batches} batches",
+                     "              min angle {min_angle_before_deg:3}° before, {min_angle_after_deg:3}° after; "
+                     "{non_manifold_edges_kept} non-manifold edges never split",
+                     "              {seconds_refine_total:3} s, of which {seconds_refine_rays:3} s tracing new vertices "
+                     "(overhead {refine_overhead_fraction:%1})"});
+  if (uniform) r.print(stdout, {"  refine:     uniform (OpenSubdiv, {scheme}), {levels} levels, {seconds_refine:3} s"});
+  if (ao)
+    r.print(stdout, {"  signal:     ambient occlusion, {rays_per_vertex} rays per vertex, seed {seed}; {clamped_values} values "
+                     "clamped into [0, 1]"});
+  else
+    r.print(stdout, {"  transfer:   order {order} ({coefficients} coefficients), {rays_per_vertex} rays per vertex, seed {seed}"});
+  if (fit == "average")
+    r.print(stdout, {"  fit:        average of {samples} surface samples ({sample_rays} rays each, {seconds_samples:3} s), averaged in "
+                     "{seconds_fit:3} s"});
+  if (fit == "lsq") {
+    r.print(stdout, {"  fit:        least squares, {regularizer} regulariser, alpha {alpha}, {mass} mass; {samples} surface "
+                     "samples ({sample_rays} rays each, {seconds_samples:3} s)"});
+    const std::string cg = r.has("fit_cg_note") ? r.format(", {fit_cg_iterations} {fit_cg_note}") : "";
+    std::printf("%s\n", r.format("              solve {seconds_fit:3} s (assemble {seconds_fit_assemble:3}, factor "
+                                 "{seconds_fit_factor:3}, solve {seconds_fit_solve:3}; {fit_solver}" + cg +
+                                 "), {solve_memory_mib:1} MiB; {fit_unsupported_vertices} vertices unsupported")
+                            .c_str());
+  }
+  r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)",
+                   "  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "
+                   "{seconds_transfer:3}, refine {seconds_refine:3}, samples {seconds_samples:3}, fit {seconds_fit:3}, write "
+                   "{seconds_write:3});",
+                   "              peak memory {peak_memory_mib:0} MiB"});
+}
+
+}  // namespace prtsub

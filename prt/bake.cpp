@@ -1,0 +1,191 @@
+// The bake pipeline. Data flows one way, each stage a call into its own room:
+//
+//   uniform refinement (subdiv/uniform)  →  one Embree scene of the (unchanged) geometry
+//   →  transfer at every render vertex (transfer)  →  adaptive refinement, asking the scene for
+//   new vertices' transfer (subdiv/refine through refine_signal)  →  surface samples and their
+//   transfer, reduced to face moments as they are traced  →  the fit (fit)  →  AO clamping.
+//
+// Linear uniform and adaptive refinement keep the geometry, so one scene serves throughout;
+// Loop moves it, and the scene is built after it. Seeds: the vertices' rays depend on
+// (transfer.seed, render-vertex index), the samples' on a seed derived from transfer.seed, so
+// a bake is a function of its options and the mesh, not of threads or batching.
+#include "prtsub/prt/bake.h"
+
+#include <algorithm>
+
+#include "prtsub/prt/ray_scene.h"
+#include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/stopwatch.h"
+#include "prtsub/version.h"
+
+namespace prtsub {
+
+Refinement parse_refinement(const std::string& name) {
+  if (name == "none") return Refinement::None;
+  if (name == "adaptive") return Refinement::Adaptive;
+  if (name == "uniform") return Refinement::Uniform;
+  throw InputError("unknown refinement '" + name + "' (none, adaptive, uniform)");
+}
+
+const char* refinement_name(Refinement r) {
+  return r == Refinement::None ? "none" : r == Refinement::Adaptive ? "adaptive" : "uniform";
+}
+
+void check_bake_options(const BakeOptions& o) {
+  check_transfer_options(o.transfer);
+  if (o.sample_rays < 1 || o.sample_rays > (1 << 20))
+    throw InputError("rays per sample must be between 1 and 1048576, got " + std::to_string(o.sample_rays));
+  if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw InputError("adaptive refinement needs a triangle budget");
+  if (o.refine == Refinement::Uniform && (o.uniform.levels < 1 || o.uniform.levels > 8))
+    throw InputError("uniform refinement: levels must be between 1 and 8, got " + std::to_string(o.uniform.levels));
+  if (!(o.fit.alpha >= 0) || !std::isfinite(o.fit.alpha))
+    throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.fit.alpha));
+}
+
+FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& samples,
+                               const TransferOptions& options, TransferStats* stats, const ProgressFn& progress) {
+  // Samples are traced in chunks of at most kChunk, each reduced to its three moment rows as
+  // soon as it is traced: storing every sample's transfer would cost a row per sample and the
+  // time to write it. A face's chunks are then summed in order, so the result does not depend
+  // on the threads; chunks rather than faces, because one face may hold most of the samples
+  // (a floor) and one thread traces a chunk.
+  constexpr size_t kChunk = 64;
+  const size_t F = mesh.num_faces();
+  std::vector<size_t> chunk_begin{0}, first_chunk(F + 1, 0);
+  for (size_t f = 0; f < F; ++f) {
+    first_chunk[f] = chunk_begin.size() - 1;
+    for (size_t k = samples.begin[f]; k < samples.begin[f + 1]; k += kChunk) chunk_begin.push_back(std::min(k + kChunk, samples.begin[f + 1]));
+  }
+  first_chunk[F] = chunk_begin.size() - 1;
+  const Eigen::Index K = sh_count(options.order);
+  RowMatrixXd partial(static_cast<Eigen::Index>(3 * (chunk_begin.size() - 1)), K);
+  shadowed_transfer_groups(
+      scene, samples.points, samples.normals, chunk_begin, options,
+      [&](size_t c, const double* values, size_t) {
+        sample_moments(samples, chunk_begin[c], chunk_begin[c + 1], values, K, partial.row(static_cast<Eigen::Index>(3 * c)).data());
+      },
+      stats, progress, &samples.offsets);
+  FaceMoments m{RowMatrixXd::Zero(static_cast<Eigen::Index>(3 * F), K)};
+  for (size_t f = 0; f < F; ++f)
+    for (size_t c = first_chunk[f]; c < first_chunk[f + 1]; ++c)
+      m.rows.middleRows(static_cast<Eigen::Index>(3 * f), 3) += partial.middleRows(static_cast<Eigen::Index>(3 * c), 3);
+  return m;
+}
+
+BakeOptions resolve_bake_options(const BakeOptions& in) {
+  BakeOptions o = in;
+  if (o.signal == AssetSignal::Ao) o.transfer.order = 1;
+  o.samples.seed = mix64(o.transfer.seed + 17);
+  o.fit.threads = o.transfer.threads;
+  return o;
+}
+
+namespace {
+
+Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
+  Metadata m = o.signal == AssetSignal::Ao ? ao_metadata() : sh_convention_metadata(o.transfer.order);
+  m.push_back({"source", o.source.empty() ? "(in memory)" : o.source});
+  m.push_back({"rays", std::to_string(o.transfer.rays)});
+  m.push_back({"seed", std::to_string(o.transfer.seed)});
+  m.push_back({"threads", std::to_string(o.transfer.threads) + " (results do not depend on it)"});
+  m.push_back({"crease_angle", std::to_string(r.mesh.crease_angle_deg)});
+  m.push_back({"normals", r.mesh.normals_from_file ? "file" : "computed"});
+  m.push_back({"estimator", "cosine-lattice cross-fitted-control-variate"});
+  m.push_back({"refine", refinement_name(o.refine)});
+  if (o.refine == Refinement::Adaptive) {
+    m.push_back({"budget", std::to_string(o.adaptive.budget)});
+    m.push_back({"estimate", estimate_name(o.estimate)});
+    m.push_back({"max_edge", std::to_string(o.adaptive.max_edge)});
+    m.push_back({"batch", std::to_string(o.adaptive.batch)});
+  }
+  if (o.refine == Refinement::Uniform) {
+    m.push_back({"levels", std::to_string(o.uniform.levels)});
+    m.push_back({"scheme", uniform_scheme_name(o.uniform.scheme)});
+  }
+  m.push_back({"fit", fit_method_name(o.fit.method)});
+  if (o.fit.method != FitMethod::Point) {
+    m.push_back({"samples", std::to_string(r.fit_data.samples.size())});
+    m.push_back({"sample_rays", std::to_string(o.sample_rays)});
+  }
+  if (o.fit.method == FitMethod::LeastSquares) {
+    m.push_back({"alpha", std::to_string(o.fit.alpha)});
+    m.push_back({"regularizer", regularizer_name(o.fit.regularizer)});
+    m.push_back({"mass", mass_matrix_name(o.fit.mass)});
+  }
+  m.push_back({"generator", std::string("prtsub ") + kVersion});
+  return m;
+}
+
+void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& r) {
+  TransferSignalOptions so;
+  so.estimate = o.estimate;
+  so.transfer = o.transfer;
+  TransferSignal signal(scene, so);
+  r.refine = refine_adaptive(r.mesh, r.transfer, signal, o.adaptive);
+  r.rays += signal.rays();
+  if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
+}
+
+void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
+  r.fit_data = sample_signal(r.mesh, scene, o, progress);
+  r.rays += r.fit_data.rays;
+  r.seconds_samples = clock.lap();
+  r.point = r.transfer;
+  r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit);
+  r.seconds_fit = clock.lap();
+  if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
+}
+
+}  // namespace
+
+FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& in, const BakeProgress& progress) {
+  const BakeOptions o = resolve_bake_options(in);
+  const Stopwatch clock;
+  FitData d;
+  d.samples = make_surface_samples(mesh, o.samples);
+  TransferOptions to = o.transfer;
+  to.rays = o.sample_rays;
+  to.seed = mix64(o.transfer.seed ^ 0x5A3D1E5ull);  // independent of the vertices' rays
+  to.stream_offset = 0;
+  if (progress.stage) progress.stage("samples", d.samples.size());
+  TransferStats stats;
+  d.moments = trace_face_moments(mesh, scene, d.samples, to, &stats, progress.add);
+  d.rays = stats.rays;
+  d.seconds = clock.total();
+  return d;
+}
+
+BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress& progress) {
+  const BakeOptions o = resolve_bake_options(options);
+  check_bake_options(o);
+  Stopwatch clock;
+  BakeResult r;
+  r.mesh = o.refine == Refinement::Uniform ? refine_uniform(mesh, o.uniform) : mesh;
+  r.seconds_refine = clock.lap();
+  const RayScene scene(r.mesh.positions, position_triangles(r.mesh));
+  r.seconds_scene = clock.lap();
+  TransferStats stats;
+  const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
+  if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
+  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, o.transfer, &stats, progress.add, &offsets);
+  r.rays = stats.rays;
+  r.seconds_transfer = clock.lap();
+  if (o.refine == Refinement::Adaptive) {
+    refine_adaptively(scene, o, r);
+    r.seconds_refine = clock.lap();
+  }
+  if (o.fit.method != FitMethod::Point) fit(scene, o, progress, clock, r);
+  if (r.point.size() == 0) r.point = r.transfer;
+  if (o.signal == AssetSignal::Ao) {
+    // The paper's choice: clamp after the fit (a constrained solve is rarely worth it).
+    r.clamped = clamp_ao(r.transfer);
+    clamp_ao(r.point);
+  }
+  r.seconds_total = clock.total();
+  r.metadata = bake_metadata(o, r);
+  return r;
+}
+
+}  // namespace prtsub

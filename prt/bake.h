@@ -1,0 +1,99 @@
+// The whole bake as one call: mesh → (uniform refinement) → transfer at the vertices →
+// (adaptive refinement) → (surface samples and fit) → the asset's vertex values.
+//
+//   prtsub::Mesh mesh = prtsub::load_mesh("bunny.ply");      // or build_mesh(raw) in memory
+//   prtsub::BakeOptions o;
+//   o.refine = prtsub::Refinement::Adaptive;
+//   o.adaptive.budget = 100000;
+//   prtsub::BakeResult r = prtsub::bake(mesh, o);
+//   prtsub::write_asset("bunny_prt.ply", r.mesh, r.transfer, r.metadata);
+//
+// The library prints nothing: progress arrives through BakeProgress, warnings in the result.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "prtsub/prt/asset.h"
+#include "prtsub/prt/fit.h"
+#include "prtsub/prt/refine_signal.h"
+#include "prtsub/subdiv/refine.h"
+#include "prtsub/subdiv/uniform.h"
+
+namespace prtsub {
+
+enum class Refinement {
+  None,      //!< the input's own triangles
+  Adaptive,  //!< to exactly `adaptive.budget` triangles where the transfer changes
+  Uniform,   //!< OpenSubdiv 1→4 splits, `uniform.levels` times: the baseline
+};
+Refinement parse_refinement(const std::string& name);  //!< none, adaptive, uniform \throw InputError
+const char* refinement_name(Refinement r);
+
+struct BakeOptions {
+  //! Order, rays, seed and threads of the vertices' transfer. AO bakes force order 1; the
+  //! samples' seed and the fit's threads derive from these.
+  TransferOptions transfer;
+  AssetSignal signal = AssetSignal::Transfer;  //!< Ao: order-1 transfer, written as ambient occlusion
+  Refinement refine = Refinement::None;
+  RefineOptions adaptive;                      //!< Adaptive: budget (required), batch, max_edge
+  EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
+  UniformOptions uniform;                      //!< Uniform: levels and scheme
+  FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples
+  SampleOptions samples;                       //!< where the fit's samples go (its seed derives from transfer.seed)
+  //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
+  int sample_rays = 16;
+  std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
+};
+
+//! Told when a stage with `total` work items starts, then of items as they finish (from
+//! worker threads). Either part may be empty.
+struct BakeProgress {
+  std::function<void(const char* stage, size_t total)> stage;
+  ProgressFn add;
+};
+
+//! Where the fit's samples and their transfer come from, kept so that several fits can share them.
+struct FitData {
+  SurfaceSamples samples;
+  FaceMoments moments;  //!< the samples' transfer, reduced face by face as it is traced
+  uint64_t rays = 0;
+  double seconds = 0;
+};
+
+struct BakeResult {
+  Mesh mesh;             //!< the output mesh
+  RowMatrixXd transfer;  //!< #V by N²: the asset's values (order-1 transfer for AO)
+  RowMatrixXd point;     //!< #V by N²: the point-sampled values (equal to transfer when fit is point)
+  RefineStats refine;    //!< adaptive refinement's counts and times
+  FitData fit_data;      //!< the samples (empty when fit is point)
+  FitStats fit;
+  size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
+  uint64_t rays = 0;     //!< every transfer ray traced
+  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_fit = 0,
+         seconds_total = 0;
+  std::vector<std::string> warnings;
+  Metadata metadata;     //!< what the asset records
+};
+
+//! Runs the pipeline on `mesh` (which it copies; refinement changes the copy).
+//! \throw InputError for bad options or a mesh refinement cannot take, EmbreeError, SolverError
+BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress& progress = {});
+
+//! The options bake() actually runs with: AO forces order 1, the samples' seed derives from
+//! transfer.seed and the fit's threads are the transfer's.
+BakeOptions resolve_bake_options(const BakeOptions& options);
+
+//! Checks options before any work. \throw InputError naming the value at fault
+void check_bake_options(const BakeOptions& options);
+
+//! The fit's samples on `mesh` and their transfer (stage "samples").
+FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& options, const BakeProgress& progress = {});
+
+//! The samples' transfer, reduced to the fit's face moments as it is traced; the same for any
+//! thread count.
+FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& samples,
+                               const TransferOptions& options, TransferStats* stats = nullptr, const ProgressFn& progress = {});
+
+}  // namespace prtsub

@@ -1,0 +1,105 @@
+// The library's one entry point, called as a consumer would: a mesh built in memory, options as
+// structs, progress through callbacks, nothing printed.
+#include "prtsub/prt/bake.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <mutex>
+
+#include "helpers.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/version.h"
+
+namespace prtsub {
+namespace {
+
+Mesh sphere_on_plane() { return test::build(test::merge(test::icosphere(1), test::quad(2.5, -1.0, true))); }
+
+TEST(Bake, AdaptiveRefinementIsIdenticalForAnyThreadCount) {
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.refine = Refinement::Adaptive, o.adaptive.budget = 900, o.adaptive.batch = 16;
+  o.transfer.rays = 32, o.transfer.threads = 1;
+  const BakeResult one = bake(mesh, o);
+  o.transfer.threads = 2;
+  const BakeResult two = bake(mesh, o);
+  EXPECT_EQ(one.mesh.triangles, two.mesh.triangles);
+  EXPECT_EQ((one.transfer - two.transfer).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(one.mesh.num_faces(), 900u);
+}
+
+TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.transfer.rays = 16, o.sample_rays = 4, o.samples.per_triangle = 4;
+  o.source = "sphere on plane";
+  std::mutex m;
+  std::map<std::string, size_t> totals, done;
+  std::string current;
+  BakeProgress progress;
+  progress.stage = [&](const char* stage, size_t total) { current = stage, totals[stage] = total; };
+  progress.add = [&](size_t n) {
+    std::lock_guard<std::mutex> lock(m);
+    done[current] += n;
+  };
+  const BakeResult r = bake(mesh, o, progress);
+  EXPECT_EQ(r.mesh.num_faces(), mesh.num_faces());
+  ASSERT_EQ(r.transfer.rows(), static_cast<Eigen::Index>(mesh.num_vertices()));
+  EXPECT_EQ(r.transfer.cols(), sh_count(4));
+  EXPECT_TRUE(r.transfer.allFinite());
+  EXPECT_EQ(totals["transfer"], mesh.num_vertices());
+  EXPECT_EQ(done["transfer"], mesh.num_vertices());
+  EXPECT_EQ(totals["samples"], r.fit_data.samples.size());
+  EXPECT_EQ(done["samples"], r.fit_data.samples.size());
+  EXPECT_EQ(r.rays, uint64_t(16) * mesh.num_vertices() + uint64_t(4) * r.fit_data.samples.size());
+  std::map<std::string, std::string> meta(r.metadata.begin(), r.metadata.end());
+  EXPECT_EQ(meta["generator"], std::string("prtsub ") + kVersion);
+  EXPECT_EQ(meta["source"], "sphere on plane");
+  EXPECT_EQ(meta["fit"], "lsq");
+  EXPECT_EQ(meta["refine"], "none");
+  // The point values ride along: the fit moved them, and not by much on a smooth signal.
+  EXPECT_GT((r.point - r.transfer).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {
+  BakeOptions o;
+  o.signal = AssetSignal::Ao;
+  o.transfer.order = 6;  // ignored: AO is order-1 transfer
+  o.transfer.rays = 16;
+  const BakeResult r = bake(sphere_on_plane(), o);
+  ASSERT_EQ(r.transfer.cols(), 1);
+  EXPECT_GE(r.transfer.minCoeff(), 0.0);
+  EXPECT_LE(r.transfer.maxCoeff() * kAoPerT0, 1.0 + 1e-12);
+}
+
+TEST(Bake, BadOptionsNameTheValueNotAFlag) {
+  const Mesh mesh = sphere_on_plane();
+  auto message = [&](const BakeOptions& o) {
+    try {
+      bake(mesh, o);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  BakeOptions adaptive;
+  adaptive.refine = Refinement::Adaptive;
+  EXPECT_EQ(message(adaptive), "adaptive refinement needs a triangle budget");
+  BakeOptions rays;
+  rays.sample_rays = 0;
+  EXPECT_EQ(message(rays), "rays per sample must be between 1 and 1048576, got 0");
+  BakeOptions order;
+  order.transfer.order = 11;
+  EXPECT_EQ(message(order), "SH order must be between 1 and 10, got 11");
+  BakeOptions levels;
+  levels.refine = Refinement::Uniform, levels.uniform.levels = 9;
+  EXPECT_EQ(message(levels), "uniform refinement: levels must be between 1 and 8, got 9");
+  EXPECT_THROW(parse_refinement("sideways"), InputError);
+  EXPECT_EQ(parse_refinement("uniform"), Refinement::Uniform);
+  EXPECT_STREQ(refinement_name(Refinement::Adaptive), "adaptive");
+}
+
+}  // namespace
+}  // namespace prtsub

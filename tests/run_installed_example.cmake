@@ -1,0 +1,22 @@
+# ctest: install the build into a fresh prefix, build examples/bake_in_memory against that
+# prefix alone (find_package(prtsub CONFIG)), run it, and read its asset back with the CLI.
+file(REMOVE_RECURSE ${WORK})
+set(prefix ${WORK}/prefix)
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
+  endif()
+  message("${out}")
+endfunction()
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+foreach(header prtsub/prt/bake.h prtsub/subdiv/mesh.h prtsub/version.h)
+  if(NOT EXISTS ${prefix}/include/${header})
+    message(FATAL_ERROR "not installed: include/${header}")
+  endif()
+endforeach()
+run(${CMAKE_COMMAND} -S ${SOURCE} -B ${WORK}/build -G ${GENERATOR} -DCMAKE_BUILD_TYPE=Release
+    -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF)
+run(${CMAKE_COMMAND} --build ${WORK}/build)
+run(${WORK}/build/bake_in_memory ${WORK}/column.ply)
+run(${prefix}/bin/prtsub inspect ${WORK}/column.ply)
