@@ -1,5 +1,6 @@
 // Embree reports errors through a callback; we record the first one and throw from C++ after
-// the rtc* call returns, never through Embree's C frames.
+// the rtc* call returns, never through Embree's C frames. Every handle is owned (EmbreeDevice,
+// EmbreeScene, EmbreeGeometry), so a throw at any step releases what was made before it.
 #include "prtsub/prt/ray_scene.h"
 
 #include <cfloat>
@@ -40,40 +41,34 @@ RayScene::RayScene(const RowMatrixX3d& positions, const std::vector<Triangle>& t
   diagonal_ = b.diagonal();
   offset_ = options.relative_offset * diagonal_;
 
-  device_ = rtcNewDevice(nullptr);
+  device_.reset(rtcNewDevice(nullptr));
   if (!device_) throw EmbreeError("Embree: cannot create device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
-  rtcSetDeviceErrorFunction(device_, on_embree_error, error_.get());
-  scene_ = rtcNewScene(device_);
+  rtcSetDeviceErrorFunction(device_.get(), on_embree_error, error_.get());
+  scene_.reset(rtcNewScene(device_.get()));
   check("creating the scene");
-  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
+  rtcSetSceneBuildQuality(scene_.get(), RTC_BUILD_QUALITY_MEDIUM);
 
-  RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+  const EmbreeGeometry geom(rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
+  check("creating the geometry");
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                           3 * sizeof(float), static_cast<size_t>(positions.rows())));
-  auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+  auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                              3 * sizeof(uint32_t), triangles.size()));
-  if (!vb || !ib) {
-    rtcReleaseGeometry(geom);
-    check("allocating geometry buffers");
-    throw EmbreeError("Embree: cannot allocate geometry buffers");
-  }
+  check("allocating geometry buffers");
+  if (!vb || !ib) throw EmbreeError("Embree: cannot allocate geometry buffers");
   for (Eigen::Index i = 0; i < positions.rows(); ++i) {
     Eigen::Vector3f p = to_local(positions.row(i).transpose());
     vb[3 * i] = p.x(), vb[3 * i + 1] = p.y(), vb[3 * i + 2] = p.z();
   }
   for (size_t f = 0; f < triangles.size(); ++f)
     for (int k = 0; k < 3; ++k) ib[3 * f + k] = triangles[f][k];
-  rtcCommitGeometry(geom);
-  rtcAttachGeometry(scene_, geom);
-  rtcReleaseGeometry(geom);
-  rtcCommitScene(scene_);
+  rtcCommitGeometry(geom.get());
+  rtcAttachGeometry(scene_.get(), geom.get());
+  rtcCommitScene(scene_.get());
   check("building the scene");
 }
 
-RayScene::~RayScene() {
-  if (scene_) rtcReleaseScene(scene_);
-  if (device_) rtcReleaseDevice(device_);
-}
+RayScene::~RayScene() = default;
 
 void RayScene::check(const char* what) const {
   std::lock_guard<std::mutex> lock(error_->mutex);

@@ -18,6 +18,17 @@ struct RaySceneOptions {
   double relative_offset = 4e-6;
 };
 
+//! Owners of Embree's reference-counted handles: each releases its reference when it goes, so a
+//! constructor that throws half-way leaks nothing.
+struct EmbreeRelease {
+  void operator()(RTCDevice d) const { rtcReleaseDevice(d); }
+  void operator()(RTCScene s) const { rtcReleaseScene(s); }
+  void operator()(RTCGeometry g) const { rtcReleaseGeometry(g); }
+};
+using EmbreeDevice = std::unique_ptr<RTCDeviceTy, EmbreeRelease>;
+using EmbreeScene = std::unique_ptr<RTCSceneTy, EmbreeRelease>;
+using EmbreeGeometry = std::unique_ptr<RTCGeometryTy, EmbreeRelease>;
+
 //! An Embree device and committed triangle scene in local coordinates: the bounding box's
 //! centre is subtracted in double before converting to float, so a scene far from the
 //! origin keeps its full float precision.
@@ -28,11 +39,11 @@ class RayScene {
   //! \throw EmbreeError if Embree fails (the message carries Embree's own)
   RayScene(const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
            const RaySceneOptions& options = {});
-  ~RayScene();
+  ~RayScene();  // the scene before the device: members go in reverse order
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
 
-  RTCScene handle() const { return scene_; }
+  RTCScene handle() const { return scene_.get(); }
   //! World point to the scene's local (float) frame.
   Eigen::Vector3f to_local(const Eigen::Vector3d& p) const { return (p - centre_).cast<float>(); }
   //! Distance a ray origin is pushed along the normal, in local units.
@@ -45,8 +56,8 @@ class RayScene {
 
  private:
   std::unique_ptr<ErrorState> error_;
-  RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
+  EmbreeDevice device_;
+  EmbreeScene scene_;
   Eigen::Vector3d centre_;
   double diagonal_ = 0;
   double offset_ = 0;
