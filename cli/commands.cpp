@@ -68,16 +68,10 @@ int cmd_bake(int argc, char** argv) {
   return 0;
 }
 
-int cmd_inspect(int argc, char** argv) {
-  std::string input, report;
-  ArgParser args("inspect", "Prints what a PRT asset holds, checks it, and shows the transfer's energy per SH band.");
-  args.positional("ASSET", "a .ply asset written by prtsub bake", &input);
-  add_report_option(args, report);
-  if (!args.parse(argc, argv, 2)) return 0;
-  if (!report.empty()) check_writable(report);
-
-  Asset a = read_asset(input);  // throws on NaN/Inf, bad sizes or indices
+// inspect: what an asset holds, checked, with its transfer's energy per SH band.
+Report inspect_record(const std::string& input, const Asset& a) {
   const Eigen::Index V = a.transfer.rows();
+  const bool ao = a.signal == AssetSignal::Ao;
   size_t bad_normals = 0;
   for (Eigen::Index i = 0; i < V; ++i)
     if (std::abs(a.normals.row(i).norm() - 1.0) > 1e-3) ++bad_normals;
@@ -87,56 +81,63 @@ int cmd_inspect(int argc, char** argv) {
     for (int m = -l; m <= l; ++m) band[static_cast<size_t>(l)] += a.transfer.col(sh_index(l, m)).squaredNorm();
     total += band[static_cast<size_t>(l)];
   }
-  int order99 = a.order;
+  Report r;
+  r.set("command", "inspect");
+  r.set("input", input);
+  r.set("vertices", static_cast<int64_t>(V));
+  r.set("triangles", a.triangles.size());
+  r.set("signal", ao ? "ao" : "transfer");
+  r.set("order", a.order);
+  r.set("coefficients", sh_count(a.order));
+  r.set("normals_not_unit", bad_normals);
+  if (ao && V > 0) {
+    r.set("ao_min", a.transfer.minCoeff() * kAoPerT0);
+    r.set("ao_max", a.transfer.maxCoeff() * kAoPerT0);
+    r.set("ao_mean", a.transfer.mean() * kAoPerT0);
+  }
+  int order99 = a.order;  // the fewest bands that hold 99% of the energy
   double cumulative = 0;
   for (int l = 0; l < a.order; ++l) {
     cumulative += band[static_cast<size_t>(l)];
-    if (total > 0 && cumulative >= 0.99 * total) {
-      order99 = l + 1;
-      break;
-    }
+    if (total > 0 && cumulative >= 0.99 * total && order99 == a.order) order99 = l + 1;
+    r.set("energy_fraction_band_" + std::to_string(l), total > 0 ? band[static_cast<size_t>(l)] / total : 0.0);
+    r.set("energy_cumulative_band_" + std::to_string(l), total > 0 ? cumulative / total : 0.0);
   }
-  std::map<std::string, std::string> meta(a.metadata.begin(), a.metadata.end());
-  std::printf("prtsub inspect: %s\n", input.c_str());
-  const bool ao = a.signal == AssetSignal::Ao;
-  std::printf("  vertices:   %lld\n  triangles:  %zu\n", static_cast<long long>(V), a.triangles.size());
-  if (ao)
-    std::printf("  signal:     ambient occlusion, one ao per vertex, from %.4f to %.4f (mean %.4f)\n",
-                V ? a.transfer.minCoeff() * kAoPerT0 : 0.0, V ? a.transfer.maxCoeff() * kAoPerT0 : 0.0,
-                V ? a.transfer.mean() * kAoPerT0 : 0.0);
-  else
-    std::printf("  sh order:   %d (%d coefficients per vertex)\n", a.order, sh_count(a.order));
-  for (const auto& [k, v] : a.metadata) std::printf("  meta:       %s %s\n", k.c_str(), v.c_str());
-  std::printf("  checks:     finite values, indices in range, %zu of %lld normals not unit length\n", bad_normals,
-              static_cast<long long>(V));
-  if (!ao) std::printf("  energy by band (sum over vertices of squared coefficients):\n");
-  cumulative = 0;
-  for (int l = 0; l < a.order && !ao; ++l) {
-    cumulative += band[static_cast<size_t>(l)];
-    std::printf("    l=%d  %6.3f%%  cumulative %7.3f%%\n", l, total > 0 ? 100 * band[static_cast<size_t>(l)] / total : 0.0,
-                total > 0 ? 100 * cumulative / total : 0.0);
-  }
-  if (!ao)
-    std::printf("  order holding 99%% of the energy: %d%s\n", order99,
-                order99 < a.order ? " (a lower --order would do for this scene)" : "");
-  if (meta.count("sh_order") && meta["sh_order"] != std::to_string(a.order))
-    std::printf("  warning:    sh_order comment says %s\n", meta["sh_order"].c_str());
+  r.set("order_99_percent_energy", order99);
+  return r;
+}
 
-  if (!report.empty()) {
-    Report r;
-    r.set("command", "inspect");
-    r.set("input", input);
-    r.set("vertices", static_cast<int64_t>(V));
-    r.set("triangles", static_cast<uint64_t>(a.triangles.size()));
-    r.set("signal", ao ? "ao" : "transfer");
-    r.set("order", a.order);
-    r.set("order_99_percent_energy", order99);
-    r.set("normals_not_unit", static_cast<uint64_t>(bad_normals));
-    for (int l = 0; l < a.order; ++l)
-      r.set("energy_fraction_band_" + std::to_string(l), total > 0 ? band[static_cast<size_t>(l)] / total : 0.0);
-    r.write(report);
+int cmd_inspect(int argc, char** argv) {
+  std::string input, report;
+  ArgParser args("inspect", "Prints what a PRT asset holds, checks it, and shows the transfer's energy per SH band.");
+  args.positional("ASSET", "a .ply asset written by prtsub bake", &input);
+  add_report_option(args, report);
+  if (!args.parse(argc, argv, 2)) return 0;
+  if (!report.empty()) check_writable(report);
+
+  const Asset a = read_asset(input);  // throws on NaN/Inf, bad sizes or indices
+  const Report r = inspect_record(input, a);
+  const bool ao = a.signal == AssetSignal::Ao;
+  r.print(stdout, {"prtsub inspect: {input}", "  vertices:   {vertices}", "  triangles:  {triangles}",
+                   ao ? "  signal:     ambient occlusion, one ao per vertex, from {ao_min:4} to {ao_max:4} (mean {ao_mean:4})"
+                      : "  sh order:   {order} ({coefficients} coefficients per vertex)"});
+  for (const auto& [k, v] : a.metadata) std::printf("  meta:       %s %s\n", k.c_str(), v.c_str());
+  r.print(stdout, {"  checks:     finite values, indices in range, {normals_not_unit} of {vertices} normals not unit length"});
+  if (!ao) {
+    std::printf("  energy by band (sum over vertices of squared coefficients):\n");
+    for (int l = 0; l < a.order; ++l) {
+      const std::string b = std::to_string(l);
+      std::printf("%s\n", r.format("    l=" + b + "  {energy_fraction_band_" + b + ":%3}  cumulative {energy_cumulative_band_" + b + ":%3}").c_str());
+    }
+    const bool lower = r.number("order_99_percent_energy") < a.order;
+    std::printf("%s\n", r.format(std::string("  order holding 99% of the energy: {order_99_percent_energy}") +
+                                 (lower ? " (a lower --order would do for this scene)" : "")).c_str());
   }
-  return bad_normals ? 1 : 0;
+  const std::map<std::string, std::string> meta(a.metadata.begin(), a.metadata.end());
+  if (meta.count("sh_order") && meta.at("sh_order") != std::to_string(a.order))
+    std::printf("  warning:    sh_order comment says %s\n", meta.at("sh_order").c_str());
+  if (!report.empty()) r.write(report);
+  return r.number("normals_not_unit") > 0 ? 1 : 0;
 }
 
 int cmd_diff(int argc, char** argv) {
@@ -151,7 +152,8 @@ int cmd_diff(int argc, char** argv) {
   if (!args.parse(argc, argv, 2)) return 0;
   if (!heat_path.empty()) check_writable(heat_path);
   if (!report.empty()) check_writable(report);
-  Image a = read_image(a_path), b = read_image(b_path), heat;
+  const Image a = read_image(a_path), b = read_image(b_path);
+  Image heat;
   ImageError e;
   try {
     e = image_error(a, b, heat_path.empty() ? nullptr : &heat);
@@ -159,74 +161,70 @@ int cmd_diff(int argc, char** argv) {
     throw InputError(a_path + " vs " + b_path + ": " + err.what());
   }
   if (!heat_path.empty()) write_image(heat_path, heat);
-  std::printf("prtsub diff: %s against %s\n  pixels:     %zu covered in both\n  rmse:       %.4f%% of the reference's mean\n  psnr:       %.2f dB\n",
-              a_path.c_str(), b_path.c_str(), e.pixels, 100 * e.rmse_relative, e.psnr_db);
-  if (!report.empty()) {
-    Report r;
-    r.set("command", "diff");
-    r.set("a", a_path);
-    r.set("b", b_path);
-    r.set("pixels", static_cast<uint64_t>(e.pixels));
-    r.set("rmse_relative", e.rmse_relative);
-    r.set("rmse_percent", 100 * e.rmse_relative);
-    r.set("psnr_db", e.psnr_db);
-    r.write(report);
-  }
+  Report r;
+  r.set("command", "diff");
+  r.set("a", a_path);
+  r.set("b", b_path);
+  r.set("pixels", e.pixels);
+  r.set("rmse_relative", e.rmse_relative);
+  r.set("rmse_percent", 100 * e.rmse_relative);
+  r.set("psnr_db", e.psnr_db);
+  r.print(stdout, {"prtsub diff: {a} against {b}", "  pixels:     {pixels} covered in both",
+                   "  rmse:       {rmse_percent:4}% of the reference's mean", "  psnr:       {psnr_db:2} dB"});
+  if (!report.empty()) r.write(report);
   return 0;
 }
 
 int cmd_eval(int argc, char** argv) {
   std::string input, source, report;
   ReferenceOptions ro;
-  int points = static_cast<int>(ro.points), rays = 0;
+  int rays = 0;
   ArgParser args("eval",
                  "Surface RMS transfer error of an asset, as a percentage of ||t_unshadowed||, at seeded area-\n"
                  "stratified points on its source surface against a reference with many more rays. Each point is\n"
                  "located in the asset through source_face, so any refinement can be judged on the same points.");
   args.positional("ASSET", "a .ply asset written by prtsub bake (transfer or ao)", &input);
   args.option("--source", "INPUT", "the mesh the asset was baked from (required)", &source);
-  args.option("--points", "N", "reference points", &points, 1, 10000000);
+  args.option("--points", "N", "reference points", &ro.points, size_t(1), size_t(10000000));
   args.option("--rays", "R", "reference rays per point (0: 8x the asset's rays)", &rays, 0, 1 << 20);
   args.option("--seed", "S", "reference seed; keep it fixed to compare assets", &ro.seed);
-  args.option("--threads", "T", "worker threads, 0 for every core", &ro.threads, 0, 1024);
+  add_threads_option(args, ro.threads);
   add_report_option(args, report);
   if (!args.parse(argc, argv, 2)) return 0;
   if (source.empty()) throw UsageError("eval: missing --source INPUT");
   if (!report.empty()) check_writable(report);
   Stopwatch clock;
-  Asset asset = read_asset(input);
+  const Asset asset = read_asset(input);
   std::map<std::string, std::string> meta(asset.metadata.begin(), asset.metadata.end());
-  const int asset_rays = meta.count("rays") ? std::atoi(meta["rays"].c_str()) : 256;
+  const int asset_rays = meta.count("rays") ? std::atoi(meta["rays"].c_str()) : TransferOptions{}.rays;
   const double crease = meta.count("crease_angle") ? std::atof(meta["crease_angle"].c_str()) : LoadOptions{}.crease_angle_deg;
-  ro.points = static_cast<size_t>(points);
   ro.rays = rays > 0 ? rays : 8 * std::max(asset_rays, 1);
   ro.order = asset.order;
-  Mesh src = load_mesh(source, LoadOptions{crease});
-  RayScene scene(src.positions, position_triangles(src));
-  Reference ref = make_reference(src, scene, ro);
+  const Mesh src = load_mesh(source, LoadOptions{crease});
+  const RayScene scene(src.positions, position_triangles(src));
+  const Reference ref = make_reference(src, scene, ro);
   const double t_ref = clock.lap();
-  EvalResult e = evaluate(ref, asset.positions, asset.triangles, asset.source_face, asset.transfer);
-  std::printf("prtsub eval: %s against %s\n", input.c_str(), source.c_str());
-  std::printf("  asset:      %zu triangles, order %d, %d rays per vertex\n", asset.triangles.size(), asset.order, asset_rays);
-  std::printf("  reference:  %zu points, %d rays each (%.2f s); its own noise floor %.3f%%\n", e.points, ro.rays, t_ref,
-              e.noise_floor_percent);
-  std::printf("  error:      RMS %.3f%%, 95th percentile %.3f%% of ||t_unshadowed||\n", e.rms_percent, e.p95_percent);
-  if (e.unlocated) std::printf("  warning:    %zu reference points had no face in the asset\n", e.unlocated);
-  if (!report.empty()) {
-    Report r;
-    r.set("command", "eval");
-    r.set("input", input);
-    r.set("source", source);
-    r.set("triangles", static_cast<uint64_t>(asset.triangles.size()));
-    r.set("rms_percent", e.rms_percent);
-    r.set("p95_percent", e.p95_percent);
-    r.set("noise_floor_percent", e.noise_floor_percent);
-    r.set("reference_points", static_cast<uint64_t>(e.points));
-    r.set("reference_rays", ro.rays);
-    r.set("unlocated_points", static_cast<uint64_t>(e.unlocated));
-    r.set("seconds_reference", t_ref);
-    r.write(report);
-  }
+  const EvalResult e = evaluate(ref, asset.positions, asset.triangles, asset.source_face, asset.transfer);
+  Report r;
+  r.set("command", "eval");
+  r.set("input", input);
+  r.set("source", source);
+  r.set("triangles", asset.triangles.size());
+  r.set("order", asset.order);
+  r.set("asset_rays", asset_rays);
+  r.set("rms_percent", e.rms_percent);
+  r.set("p95_percent", e.p95_percent);
+  r.set("noise_floor_percent", e.noise_floor_percent);
+  r.set("reference_points", e.points);
+  r.set("reference_rays", ro.rays);
+  r.set("unlocated_points", e.unlocated);
+  r.set("seconds_reference", t_ref);
+  r.print(stdout, {"prtsub eval: {input} against {source}", "  asset:      {triangles} triangles, order {order}, {asset_rays} rays per vertex",
+                   "  reference:  {reference_points} points, {reference_rays} rays each ({seconds_reference:2} s); its own noise "
+                   "floor {noise_floor_percent:3}%",
+                   "  error:      RMS {rms_percent:3}%, 95th percentile {p95_percent:3}% of ||t_unshadowed||"});
+  if (e.unlocated) r.print(stdout, {"  warning:    {unlocated_points} reference points had no face in the asset"});
+  if (!report.empty()) r.write(report);
   return 0;
 }
 

@@ -142,6 +142,21 @@ struct CompareCli {
   std::string out_dir, budgets = "", estimates = "relative,shadow,curvature,length,probe,root", frame_size = "480,360";
   std::vector<std::string> lights;
   int max_levels = 4, eval_points = 20000, frame_rays = 256;
+
+  void add(ArgParser& args) {
+    bake.add_common(args);
+    args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required)", &budgets);
+    args.option("--output", "DIR", "output directory (required; created)", &out_dir);
+    args.alias("-o", "--output");
+    args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe,root]", &estimates);
+    args.option("--max-levels", "K", "uniform levels to try, up to the largest budget", &max_levels, 1, 8);
+    add_batch_option(args, bake.bake.adaptive);
+    args.option("--eval-points", "N", "reference points", &eval_points, 100, 10000000);
+    args.option("--light", "SPEC", "light of the frames [default sky and sun:1,3,2]", &lights);
+    args.option("--frame-size", "W,H", "frame size [default 480,360]", &frame_size);
+    args.option("--frame-rays", "R", "rays per pixel of the reference frame", &frame_rays, 1, 1 << 20);
+    bake.add_fit(args);
+  }
 };
 
 // The plan: the unrefined input, uniform levels up to the largest budget, adaptive at every
@@ -306,18 +321,7 @@ int cmd_compare(int argc, char** argv) {
                  "Bakes INPUT with uniform refinement (OpenSubdiv, linear) and with adaptive refinement under every\n"
                  "estimate, evaluates each against one reference, and writes DIR/results.csv, DIR/results.json and\n"
                  "DIR/report.html (table, log-log plots of error against triangles and against time, relit frames).");
-  c.bake.add_common(args);
-  args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required)", &c.budgets);
-  args.option("--output", "DIR", "output directory (required; created)", &c.out_dir);
-  args.alias("-o", "--output");
-  args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe,root]", &c.estimates);
-  args.option("--max-levels", "K", "uniform levels to try, up to the largest budget", &c.max_levels, 1, 8);
-  add_batch_option(args, c.bake.bake.adaptive);
-  args.option("--eval-points", "N", "reference points", &c.eval_points, 100, 10000000);
-  args.option("--light", "SPEC", "light of the frames [default sky and sun:1,3,2]", &c.lights);
-  args.option("--frame-size", "W,H", "frame size [default 480,360]", &c.frame_size);
-  args.option("--frame-rays", "R", "rays per pixel of the reference frame", &c.frame_rays, 1, 1 << 20);
-  c.bake.add_fit(args);
+  c.add(args);
   if (!args.parse(argc, argv, 2)) return 0;
   if (c.budgets.empty()) throw UsageError("compare: missing --budgets T1,T2,...");
   if (c.out_dir.empty()) throw UsageError("compare: missing -o DIR");

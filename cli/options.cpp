@@ -8,7 +8,11 @@ void add_transfer_options(ArgParser& args, TransferOptions& t, bool with_order) 
   if (with_order) args.option("--order", "N", "SH order: N bands, N² coefficients", &t.order, 1, kMaxShOrder);
   args.option("--rays", "R", "rays per point", &t.rays, 1, 1 << 20);
   args.option("--seed", "S", "random seed; results depend on it, not on threads", &t.seed);
-  args.option("--threads", "T", "worker threads, 0 for every core", &t.threads, 0, 1024);
+  add_threads_option(args, t.threads);
+}
+
+void add_threads_option(ArgParser& args, int& threads) {
+  args.option("--threads", "T", "worker threads, 0 for every core; results do not depend on it", &threads, 0, 1024);
 }
 
 void add_batch_option(ArgParser& args, RefineOptions& refine) {

@@ -15,6 +15,9 @@ namespace prtsub {
 //! --order (unless without_order), --rays, --seed, --threads into `transfer`.
 void add_transfer_options(ArgParser& args, TransferOptions& transfer, bool with_order = true);
 
+//! --threads T into `threads` (0: every core).
+void add_threads_option(ArgParser& args, int& threads);
+
 //! --batch B into `refine.batch` (adaptive refinement's faces per Embree batch).
 void add_batch_option(ArgParser& args, RefineOptions& refine);
 

@@ -59,110 +59,151 @@ void multiply_rows(const RowSparseMatrixd& A, const double* in, double* out, Eig
   }
 }
 
-}  // namespace
-
-BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o) {
-  const Eigen::Index n = A.rows(), K = B.cols();
-  BlockCgResult result;
-  if (n == 0 || K == 0) {
-    result.converged = true;
-    return result;
+// One block CG run: the state of K columns and the three passes of an iteration.
+class Run {
+ public:
+  Run(const RowSparseMatrixd& A, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o)
+      : A_(A), R_(B), X_(X), o_(o), n_(A.rows()), K_(B.cols()), blocks_{n_, K_, (n_ + kBlockRows - 1) / kBlockRows, o.threads, {}},
+        P_(n_, K_), Y_(n_, K_) {
+    blocks_.partial.resize(size_t(blocks_.count * K_));
   }
-  Blocks blocks{n, K, (n + kBlockRows - 1) / kBlockRows, o.threads, {}};
-  blocks.partial.resize(size_t(blocks.count * K));
-  RowMatrixXd P(n, K), Y(n, K);
 
-  // R = B − AX, in B's place (memory is what this costs most), and the norms of B and R.
-  std::vector<double> bb = blocks.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
-    for (Eigen::Index i = f * K; i < l * K; ++i) dot[i % K] += B.data()[i] * B.data()[i];
-  });
-  RowMatrixXd& R = B;
-  blocks.run([&](Eigen::Index f, Eigen::Index l, double* dot) { multiply_rows(A, X.data(), Y.data(), K, f, l, dot); });
-  std::vector<double> rr = blocks.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
-    for (Eigen::Index i = f * K; i < l * K; ++i) {
-      R.data()[i] -= Y.data()[i];
-      P.data()[i] = R.data()[i];
-      dot[i % K] += R.data()[i] * R.data()[i];
+  // R = B − AX, in B's place (memory is what this costs most), P = R, and the norms of B and R.
+  // Returns whether any column has yet to converge.
+  bool start() {
+    const Eigen::Index K = K_;
+    bb_ = blocks_.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
+      for (Eigen::Index i = f * K; i < l * K; ++i) dot[i % K] += R_.data()[i] * R_.data()[i];
+    });
+    blocks_.run([&](Eigen::Index f, Eigen::Index l, double* dot) { multiply_rows(A_, X_.data(), Y_.data(), K, f, l, dot); });
+    rr_ = blocks_.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
+      for (Eigen::Index i = f * K; i < l * K; ++i) {
+        R_.data()[i] -= Y_.data()[i];
+        P_.data()[i] = R_.data()[i];
+        dot[i % K] += R_.data()[i] * R_.data()[i];
+      }
+    });
+    const auto k = static_cast<size_t>(K);
+    target_.resize(k), alpha_.resize(k), beta_.resize(k), active_.resize(k);
+    bool any = false;
+    for (size_t c = 0; c < k; ++c) {
+      if (bb_[c] == 0) {  // the solution is zero
+        X_.col(static_cast<Eigen::Index>(c)).setZero();
+        rr_[c] = 0;
+      }
+      target_[c] = o_.tolerance * o_.tolerance * bb_[c];
+      active_[c] = rr_[c] > target_[c];
+      any |= active_[c] != 0;
     }
-  });
-
-  const auto k = static_cast<size_t>(K);
-  std::vector<double> target(k), alpha(k), beta(k);
-  std::vector<char> active(k);
-  auto worst = [&]() {
-    double w = 0;
-    for (Eigen::Index q = 0; q < K; ++q)
-      if (bb[size_t(q)] > 0) w = std::max(w, std::sqrt(rr[size_t(q)] / bb[size_t(q)]));
-    return w;
-  };
-  bool any = false;
-  for (Eigen::Index q = 0; q < K; ++q) {
-    const size_t c = size_t(q);
-    if (bb[c] == 0) {  // the solution is zero
-      X.col(q).setZero();
-      rr[c] = 0;
-    }
-    target[c] = o.tolerance * o.tolerance * bb[c];
-    active[c] = rr[c] > target[c];
-    any |= active[c] != 0;
+    history_.assign(1, worst());
+    return any;
   }
-  bool broke = false;
-  std::vector<double> history{worst()};  // the worst column's relative residual, per iteration
-  while (any && result.iterations < o.max_iterations) {
-    std::vector<double> pap = blocks.run(
-        [&](Eigen::Index f, Eigen::Index l, double* dot) { multiply_rows(A, P.data(), Y.data(), K, f, l, dot); });
+
+  // One iteration on the active columns: Y = AP with pᵀAp, then X and R with rᵀr. Returns
+  // false when a column breaks down (pᵀAp ≤ 0: A is not positive definite); sets `any` to
+  // whether a column is still active.
+  bool step(bool& any) {
+    const Eigen::Index K = K_;
+    std::vector<double> pap = blocks_.run(
+        [&](Eigen::Index f, Eigen::Index l, double* dot) { multiply_rows(A_, P_.data(), Y_.data(), K, f, l, dot); });
     for (size_t c = 0; c < size_t(K); ++c) {
-      alpha[c] = 0;
-      if (!active[c]) continue;
-      if (!(pap[c] > 0) || !std::isfinite(pap[c])) broke = true;
-      else alpha[c] = rr[c] / pap[c];
+      alpha_[c] = 0;
+      if (!active_[c]) continue;
+      if (!(pap[c] > 0) || !std::isfinite(pap[c])) return false;
+      alpha_[c] = rr_[c] / pap[c];
     }
-    if (broke) break;
-    std::vector<double> next = blocks.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
+    std::vector<double> next = blocks_.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
       for (Eigen::Index i = f; i < l; ++i) {
-        double* x = X.data() + i * K;
-        double* r = R.data() + i * K;
-        const double* p = P.data() + i * K;
-        const double* y = Y.data() + i * K;
+        double* x = X_.data() + i * K;
+        double* r = R_.data() + i * K;
+        const double* p = P_.data() + i * K;
+        const double* y = Y_.data() + i * K;
         for (Eigen::Index q = 0; q < K; ++q) {
-          x[q] += alpha[size_t(q)] * p[q];
-          r[q] -= alpha[size_t(q)] * y[q];
+          x[q] += alpha_[size_t(q)] * p[q];
+          r[q] -= alpha_[size_t(q)] * y[q];
           dot[q] += r[q] * r[q];
         }
       }
     });
     any = false;
     for (size_t c = 0; c < size_t(K); ++c) {
-      beta[c] = active[c] && rr[c] > 0 ? next[c] / rr[c] : 0;
-      if (active[c]) rr[c] = next[c];
-      active[c] = active[c] && rr[c] > target[c];
-      any |= active[c] != 0;
+      beta_[c] = active_[c] && rr_[c] > 0 ? next[c] / rr_[c] : 0;
+      if (active_[c]) rr_[c] = next[c];
+      active_[c] = active_[c] && rr_[c] > target_[c];
+      any |= active_[c] != 0;
     }
-    ++result.iterations;
-    if (!any) break;
-    // Give up early when the recent rate of decrease says the cap will not be enough: a stiff
-    // system is better handed to a direct solver now than after max_iterations passes.
-    history.push_back(worst());
-    const int it = result.iterations, window = 10;
-    if (o.predict_stall && it >= 2 * window) {
-      const double rate = std::pow(history[size_t(it)] / history[size_t(it - window)], 1.0 / window);
-      const double needed = rate < 1 ? std::log(o.tolerance / history[size_t(it)]) / std::log(rate) : INFINITY;
-      if (it + needed > o.max_iterations) {
-        result.predicted_stall = true;
-        break;
-      }
-    }
-    blocks.run([&](Eigen::Index f, Eigen::Index l, double*) {
+    history_.push_back(worst());
+    return true;
+  }
+
+  // P = R + βP on the active columns.
+  void next_direction() {
+    const Eigen::Index K = K_;
+    blocks_.run([&](Eigen::Index f, Eigen::Index l, double*) {
       for (Eigen::Index i = f; i < l; ++i) {
-        double* p = P.data() + i * K;
-        const double* r = R.data() + i * K;
+        double* p = P_.data() + i * K;
+        const double* r = R_.data() + i * K;
         for (Eigen::Index q = 0; q < K; ++q)
-          if (active[size_t(q)]) p[q] = r[q] + beta[size_t(q)] * p[q];
+          if (active_[size_t(q)]) p[q] = r[q] + beta_[size_t(q)] * p[q];
       }
     });
   }
+
+  // Whether the last 10 iterations' rate of decrease says max_iterations will not reach the
+  // tolerance: a stiff system is better handed to a direct solver now than after the cap.
+  bool stalling(int iterations) const {
+    const int window = 10;
+    if (!o_.predict_stall || iterations < 2 * window) return false;
+    const double rate = std::pow(history_[size_t(iterations)] / history_[size_t(iterations - window)], 1.0 / window);
+    const double needed = rate < 1 ? std::log(o_.tolerance / history_[size_t(iterations)]) / std::log(rate) : INFINITY;
+    return iterations + needed > o_.max_iterations;
+  }
+
+  // The worst column's relative residual.
+  double worst() const {
+    double w = 0;
+    for (size_t c = 0; c < bb_.size(); ++c)
+      if (bb_[c] > 0) w = std::max(w, std::sqrt(rr_[c] / bb_[c]));
+    return w;
+  }
+
+ private:
+  const RowSparseMatrixd& A_;
+  RowMatrixXd& R_;
+  RowMatrixXd& X_;
+  const BlockCgOptions& o_;
+  Eigen::Index n_, K_;
+  Blocks blocks_;
+  RowMatrixXd P_, Y_;
+  std::vector<double> bb_, rr_, target_, alpha_, beta_, history_;
+  std::vector<char> active_;
+};
+
+}  // namespace
+
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o) {
+  BlockCgResult result;
+  if (A.rows() == 0 || B.cols() == 0) {
+    result.converged = true;
+    return result;
+  }
+  Run run(A, B, X, o);
+  bool any = run.start(), broke = false;
+  while (any && result.iterations < o.max_iterations) {
+    if (!run.step(any)) {
+      broke = true;
+      break;
+    }
+    ++result.iterations;
+    if (!any) break;
+    if (run.stalling(result.iterations)) {
+      result.predicted_stall = true;
+      break;
+    }
+    run.next_direction();
+  }
   result.converged = !any && !broke;
-  result.relative_residual = worst();
+  result.relative_residual = run.worst();
   return result;
 }
 

@@ -31,6 +31,31 @@ struct UnionFind {
   }
 };
 
+// Groups made only of zero-area faces (their normal is NaN here) take the area-weighted normal
+// of every face at their position, ignoring creases; failing that, +z.
+void fill_degenerate_groups(const RowMatrixX3d& positions, const std::vector<Triangle>& triangles, CornerNormals& out) {
+  bool need_fallback = false;
+  for (Eigen::Index g = 0; g < out.normals.rows(); ++g) need_fallback |= std::isnan(out.normals(g, 0));
+  if (!need_fallback) return;
+  std::vector<Eigen::Vector3d> at_position(static_cast<size_t>(positions.rows()), Eigen::Vector3d::Zero());
+  for (size_t f = 0; f < triangles.size(); ++f) {
+    const Eigen::Vector3d p0 = positions.row(triangles[f][0]).transpose();
+    const Eigen::Vector3d n = (Eigen::Vector3d(positions.row(triangles[f][1]).transpose()) - p0)
+                                  .cross(Eigen::Vector3d(positions.row(triangles[f][2]).transpose()) - p0);
+    if (!n.allFinite()) continue;
+    for (int k = 0; k < 3; ++k) at_position[triangles[f][k]] += n;
+  }
+  for (uint32_t c = 0; c < triangles.size() * 3; ++c) {
+    const Eigen::Index g = out.group[c];
+    if (!std::isnan(out.normals(g, 0))) continue;
+    const Eigen::Vector3d n = at_position[triangles[c / 3][c % 3]];
+    const double len = n.norm();
+    if (len > 1e-300 && std::isfinite(len)) out.normals.row(g) = (n / len).transpose();
+    else out.normals.row(g) << 0, 0, 1;
+    ++out.fallback_normals;
+  }
+}
+
 }  // namespace
 
 CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
@@ -85,42 +110,13 @@ CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
     sum[g] += corner_angle[c / 3][c % 3] * face_normal[c / 3];
   }
 
-  // Groups made only of zero-area faces take the area-weighted normal of every face at
-  // their position, ignoring creases; failing that, +z.
-  std::vector<Eigen::Vector3d> at_position;
   out.normals.resize(static_cast<Eigen::Index>(sum.size()), 3);
   for (size_t g = 0; g < sum.size(); ++g) {
-    double len = sum[g].norm();
-    if (len > 1e-300 && std::isfinite(len)) {
-      out.normals.row(static_cast<Eigen::Index>(g)) = (sum[g] / len).transpose();
-    } else {
-      out.normals.row(static_cast<Eigen::Index>(g)).setConstant(std::nan(""));
-    }
+    const double len = sum[g].norm();
+    if (len > 1e-300 && std::isfinite(len)) out.normals.row(static_cast<Eigen::Index>(g)) = (sum[g] / len).transpose();
+    else out.normals.row(static_cast<Eigen::Index>(g)).setConstant(std::nan(""));
   }
-  bool need_fallback = false;
-  for (Eigen::Index g = 0; g < out.normals.rows(); ++g) need_fallback |= std::isnan(out.normals(g, 0));
-  if (need_fallback) {
-    at_position.assign(static_cast<size_t>(positions.rows()), Eigen::Vector3d::Zero());
-    for (size_t f = 0; f < nf; ++f) {
-      Eigen::Vector3d p0 = positions.row(triangles[f][0]).transpose();
-      Eigen::Vector3d n = (Eigen::Vector3d(positions.row(triangles[f][1]).transpose()) - p0)
-                              .cross(Eigen::Vector3d(positions.row(triangles[f][2]).transpose()) - p0);
-      if (!n.allFinite()) continue;
-      for (int k = 0; k < 3; ++k) at_position[triangles[f][k]] += n;
-    }
-    for (uint32_t c = 0; c < nf * 3; ++c) {
-      Eigen::Index g = out.group[c];
-      if (!std::isnan(out.normals(g, 0))) continue;
-      Eigen::Vector3d n = at_position[triangles[c / 3][c % 3]];
-      double len = n.norm();
-      if (len > 1e-300 && std::isfinite(len)) {
-        out.normals.row(g) = (n / len).transpose();
-      } else {
-        out.normals.row(g) << 0, 0, 1;
-      }
-      ++out.fallback_normals;
-    }
-  }
+  fill_degenerate_groups(positions, triangles, out);
   return out;
 }
 

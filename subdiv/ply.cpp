@@ -156,12 +156,11 @@ std::string read_file_bytes(const std::string& path) {
 
 PlyFile read_ply(const std::string& path) { return parse_ply(read_file_bytes(path), path); }
 
-PlyFile parse_ply(const std::string& bytes, const std::string& path) {
-  if (bytes.compare(0, 3, "ply") != 0) throw InputError(path + ": not a PLY file (no 'ply' magic)");
-  PlyFile file;
-  std::vector<ElementDecl> decls;
+namespace {
+
+// The header: format, comments and element declarations. Returns the offset of the body.
+size_t parse_header(const std::string& bytes, const std::string& path, PlyFile& file, std::vector<ElementDecl>& decls) {
   size_t pos = 0;
-  bool ended = false;
   for (int line_no = 1; pos < bytes.size(); ++line_no) {
     size_t eol = bytes.find('\n', pos);
     if (eol == std::string::npos) break;
@@ -172,27 +171,27 @@ PlyFile parse_ply(const std::string& bytes, const std::string& path) {
     std::string kw;
     ls >> kw;
     if (kw == "ply" || kw.empty() || kw == "obj_info") continue;
-    if (kw == "end_header") { ended = true; break; }
+    if (kw == "end_header") {
+      if (file.format.empty()) throw InputError(path + ": PLY header has no format line");
+      return pos;
+    }
     if (kw == "comment") {
       file.comments.push_back(line.size() > 8 ? line.substr(8) : "");
     } else if (kw == "format") {
       std::string version;
       ls >> file.format >> version;
-      if (file.format != "ascii" && file.format != "binary_little_endian" &&
-          file.format != "binary_big_endian")
+      if (file.format != "ascii" && file.format != "binary_little_endian" && file.format != "binary_big_endian")
         throw InputError(path + ": unknown PLY format '" + file.format + "'");
     } else if (kw == "element") {
       ElementDecl e;
       long long count = -1;
       ls >> e.name >> count;
-      if (!ls || count < 0)
-        throw InputError(path + ": bad element line " + std::to_string(line_no) + " in PLY header");
+      if (!ls || count < 0) throw InputError(path + ": bad element line " + std::to_string(line_no) + " in PLY header");
       e.count = static_cast<size_t>(count);
       decls.push_back(e);
     } else if (kw == "property") {
       if (decls.empty())
-        throw InputError(path + ": PLY property before any element (header line " +
-                         std::to_string(line_no) + ")");
+        throw InputError(path + ": PLY property before any element (header line " + std::to_string(line_no) + ")");
       PropertyDecl p;
       std::string t;
       ls >> t;
@@ -209,60 +208,68 @@ PlyFile parse_ply(const std::string& bytes, const std::string& path) {
       if (p.name.empty()) throw InputError(path + ": PLY property without a name");
       decls.back().properties.push_back(p);
     } else {
-      throw InputError(path + ": unknown PLY header keyword '" + kw + "' on line " +
-                       std::to_string(line_no));
+      throw InputError(path + ": unknown PLY header keyword '" + kw + "' on line " + std::to_string(line_no));
     }
   }
-  if (!ended) throw InputError(path + ": PLY header has no end_header");
-  if (file.format.empty()) throw InputError(path + ": PLY header has no format line");
+  throw InputError(path + ": PLY header has no end_header");
+}
 
+// Columns of one element, laid out as its declaration says: scalars and lists apart.
+PlyElement empty_element(const ElementDecl& d, std::vector<int>& slot) {
+  PlyElement e;
+  e.name = d.name;
+  e.count = d.count;
+  slot.resize(d.properties.size());
+  for (size_t k = 0; k < d.properties.size(); ++k) {
+    if (d.properties[k].is_list) {
+      slot[k] = static_cast<int>(e.list_names.size());
+      e.list_names.push_back(d.properties[k].name);
+      e.list_offsets.emplace_back(1, 0);
+      e.list_offsets.back().reserve(d.count + 1);
+      e.list_values.emplace_back();
+    } else {
+      slot[k] = static_cast<int>(e.scalar_names.size());
+      e.scalar_names.push_back(d.properties[k].name);
+      e.scalars.emplace_back();
+      e.scalars.back().reserve(d.count);
+    }
+  }
+  return e;
+}
+
+}  // namespace
+
+PlyFile parse_ply(const std::string& bytes, const std::string& path) {
+  if (bytes.compare(0, 3, "ply") != 0) throw InputError(path + ": not a PLY file (no 'ply' magic)");
+  PlyFile file;
+  std::vector<ElementDecl> decls;
+  const size_t pos = parse_header(bytes, path, file, decls);
   const bool ascii = file.format == "ascii";
   BinaryReader bin(bytes, pos, file.format == "binary_big_endian", path);
   AsciiReader asc(bytes, pos, path);
-  auto read = [&](PlyType t, const std::string& where) {
-    return ascii ? asc.read(where) : bin.read(t, where);
-  };
-
+  auto read = [&](PlyType t, const std::string& where) { return ascii ? asc.read(where) : bin.read(t, where); };
   for (const ElementDecl& d : decls) {
     if (!ascii && d.count > 0 && min_row_bytes(d) > 0 && d.count > bin.remaining() / min_row_bytes(d))
-      throw InputError(path + ": truncated binary PLY (header declares " + std::to_string(d.count) +
-                       " " + d.name + " rows, the file is too short for them)");
+      throw InputError(path + ": truncated binary PLY (header declares " + std::to_string(d.count) + " " + d.name +
+                       " rows, the file is too short for them)");
     if (ascii && d.count > bytes.size())  // each row takes at least one byte
-      throw InputError(path + ": truncated ASCII PLY (header declares " + std::to_string(d.count) +
-                       " " + d.name + " rows)");
-    PlyElement e;
-    e.name = d.name;
-    e.count = d.count;
-    std::vector<int> slot(d.properties.size());
-    for (size_t k = 0; k < d.properties.size(); ++k) {
-      if (d.properties[k].is_list) {
-        slot[k] = static_cast<int>(e.list_names.size());
-        e.list_names.push_back(d.properties[k].name);
-        e.list_offsets.emplace_back(1, 0);
-        e.list_offsets.back().reserve(d.count + 1);
-        e.list_values.emplace_back();
-      } else {
-        slot[k] = static_cast<int>(e.scalar_names.size());
-        e.scalar_names.push_back(d.properties[k].name);
-        e.scalars.emplace_back();
-        e.scalars.back().reserve(d.count);
-      }
-    }
+      throw InputError(path + ": truncated ASCII PLY (header declares " + std::to_string(d.count) + " " + d.name + " rows)");
+    std::vector<int> slot;
+    PlyElement e = empty_element(d, slot);
     const std::string where = "element '" + d.name + "'";
     for (size_t row = 0; row < d.count; ++row) {
       for (size_t k = 0; k < d.properties.size(); ++k) {
         const PropertyDecl& p = d.properties[k];
-        if (p.is_list) {
-          double n = read(p.count_type, where);
-          if (!(n >= 0) || n > 1e6 || n != std::floor(n))
-            throw InputError(path + ": bad list length " + std::to_string(n) + " in " + where +
-                             " row " + std::to_string(row));
-          auto& values = e.list_values[slot[k]];
-          for (size_t i = 0; i < static_cast<size_t>(n); ++i) values.push_back(read(p.type, where));
-          e.list_offsets[slot[k]].push_back(values.size());
-        } else {
+        if (!p.is_list) {
           e.scalars[slot[k]].push_back(read(p.type, where));
+          continue;
         }
+        const double n = read(p.count_type, where);
+        if (!(n >= 0) || n > 1e6 || n != std::floor(n))
+          throw InputError(path + ": bad list length " + std::to_string(n) + " in " + where + " row " + std::to_string(row));
+        auto& values = e.list_values[slot[k]];
+        for (size_t i = 0; i < static_cast<size_t>(n); ++i) values.push_back(read(p.type, where));
+        e.list_offsets[slot[k]].push_back(values.size());
       }
     }
     file.elements.push_back(std::move(e));
