@@ -1,5 +1,5 @@
 // The Embree scene every ray query goes through. Built once per mesh and shared by many
-// calls (transfer, benchmarks, later rendering and fitting).
+// calls (transfer, refinement, the fit's samples, rendering, evaluation and benchmarks).
 #pragma once
 
 #include <embree3/rtcore.h>

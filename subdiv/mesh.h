@@ -1,7 +1,7 @@
 // The triangle mesh every stage of prtsub passes along.
 //
 // Topology and values live apart: `positions` are welded (one row per distinct point in
-// space), while render vertices carry what a GPU vertex carries (a normal, UVs, later values
+// space), while render vertices carry what a GPU vertex carries (a normal, UVs, and values
 // such as transfer). A position on a crease or a UV seam has one render vertex per side. Triangles
 // index render vertices; `vertex_position` maps each back to its position, so topology
 // (edges, adjacency, conforming splits) is always taken over positions.
