@@ -8,28 +8,16 @@
 
 #include "cli/specs.h"
 #include "helpers.h"
+#include "latlong.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
 namespace {
 
-// A lat-long map holding f at each texel's centre direction.
-Image latlong(int w, int h, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& f) {
-  Image img;
-  img.width = w, img.height = h, img.channels = 3;
-  img.pixels.resize(static_cast<size_t>(w) * h * 3);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const Eigen::Vector3d v = f(latlong_direction((x + 0.5) / w, (y + 0.5) / h));
-      for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<float>(v[c]);
-    }
-  return img;
-}
-
 TEST(Image, EnvSpecReadsAnExrFromDisk) {
   test::TempDir dir;
-  Image img = latlong(32, 16, [](const Eigen::Vector3d& w) { return Eigen::Vector3d(1 + w.y(), 0.5, 2 + w.x()); });
+  Image img = test::latlong(32, 16, [](const Eigen::Vector3d& w) { return Eigen::Vector3d(1 + w.y(), 0.5, 2 + w.x()); });
   write_image(dir.path("env.exr"), img);
   ShLight from_file = parse_light("env:" + dir.path("env.exr"), 3);
   ShLight direct = environment_light(3, img);

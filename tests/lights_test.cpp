@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "helpers.h"
+#include "latlong.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
 
@@ -107,27 +108,15 @@ TEST(Lights, RandomLightsHaveUnitPowerAndDependOnTheSeed) {
   EXPECT_GT((a.coeffs - c.coeffs).cwiseAbs().maxCoeff(), 0.01);
 }
 
-Image latlong(int w, int h, const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& f) {
-  Image img;
-  img.width = w, img.height = h, img.channels = 3;
-  img.pixels.resize(static_cast<size_t>(w) * h * 3);
-  for (int r = 0; r < h; ++r)
-    for (int c = 0; c < w; ++c) {
-      Eigen::Vector3d v = f(latlong_direction((c + 0.5) / w, (r + 0.5) / h));
-      for (int k = 0; k < 3; ++k) img.at(c, r, k) = static_cast<float>(v[k]);
-    }
-  return img;
-}
-
 TEST(Lights, EnvironmentMapsUseExactSolidAnglesAndTheDocumentedMapping) {
   // Constant map: exact solid angles sum to 4π, so l0 is exact.
-  ShLight c = environment_light(4, latlong(16, 8, [](const Eigen::Vector3d&) { return Eigen::Vector3d(1, 1, 1); }));
+  ShLight c = environment_light(4, test::latlong(16, 8, [](const Eigen::Vector3d&) { return Eigen::Vector3d(1, 1, 1); }));
   EXPECT_NEAR(c.coeffs(0, 0), 2 * std::sqrt(M_PI), 1e-12);
   EXPECT_LT(c.coeffs.bottomRows(15).cwiseAbs().maxCoeff(), 1e-12);
   // A linear map L = 1 + d·ω with d = (0.2, 0.5, -0.3): band 1 is sqrt(4π/3)·(d_y, d_z, d_x).
   // Sampling the texel centre makes an O(1/H²) error.
   Eigen::Vector3d d(0.2, 0.5, -0.3);
-  ShLight lin = environment_light(3, latlong(256, 128, [&](const Eigen::Vector3d& w) { return Eigen::Vector3d::Constant(1 + d.dot(w)); }));
+  ShLight lin = environment_light(3, test::latlong(256, 128, [&](const Eigen::Vector3d& w) { return Eigen::Vector3d::Constant(1 + d.dot(w)); }));
   const double k = std::sqrt(4 * M_PI / 3);
   EXPECT_NEAR(lin.coeffs(1, 0), k * d.y(), 2e-4);
   EXPECT_NEAR(lin.coeffs(2, 0), k * d.z(), 2e-4);
