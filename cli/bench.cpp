@@ -23,7 +23,7 @@ Report bench_solve(const Mesh& mesh, const BakeOptions& b, int repeat) {
   const Eigen::Index K = sh_count(b.transfer.order);
   // The bake reduces the samples' transfer to face moments while tracing (bench --at samples
   // times that); the fit starts from the moments.
-  FaceMoments moments{RowMatrixXd(static_cast<Eigen::Index>(3 * mesh.num_faces()), K)};
+  FaceMoments moments{RowMatrixXd(static_cast<Eigen::Index>(3 * mesh.num_faces()), K), {}};
   RowMatrixXd prior(static_cast<Eigen::Index>(mesh.num_vertices()), K);
   Rng rng(b.transfer.seed, 0);
   for (Eigen::Index i = 0; i < moments.rows.size(); ++i) moments.rows.data()[i] = rng.uniform();

@@ -47,6 +47,11 @@ void BakeCli::add_fit(ArgParser& args) {
               "Cholesky factorisation", &f.solver, {FitSolver::Auto, FitSolver::Cholmod}, fit_solver_name);
   args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"
             "variate (for comparison; noisier)", &no_control_variate_);
+  args.flag("--no-noise-weighting", "lsq: keep the whole fit everywhere instead of weighing its correction against the point\n"
+            "samples by their noise", &no_noise_weighting_);
+  args.choice("--non-negative", "lsq: keep the fit from negative radiance under constant lights (the DC coefficient), also\n"
+              "under narrow ones (the transfer function at 128 directions; costs accuracy), or not at all", &f.non_negative,
+              {NonNegative::Off, NonNegative::Constant, NonNegative::Directions}, non_negative_name);
   args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle", &s.per_triangle, 0.0, 1e6);
   args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &s.density, 0.0, 1e30);
   args.option("--min-samples", "M", "fit: samples every triangle gets at least", &s.min_per_triangle, size_t(0), size_t(1) << 20);
@@ -71,6 +76,7 @@ void BakeCli::add_refinement(ArgParser& args) {
 BakeOptions BakeCli::options() const {
   BakeOptions o = bake;
   o.fit.control_variate = !no_control_variate_;
+  o.fit.weigh_by_noise = !no_noise_weighting_;
   o.source = input;
   if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw UsageError("--budget: required with --refine adaptive");
   try {

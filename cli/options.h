@@ -41,7 +41,7 @@ struct BakeCli {
   BakeOptions options() const;
 
  private:
-  bool no_control_variate_ = false;
+  bool no_control_variate_ = false, no_noise_weighting_ = false;
 };
 
 //! One progress line per pipeline stage, on a terminal.

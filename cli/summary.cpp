@@ -55,6 +55,10 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("seconds_fit_assemble", f.seconds_assemble);
   r.set("seconds_fit_factor", f.seconds_factor);
   r.set("seconds_fit_solve", f.seconds_solve);
+  r.set("noise_weighting", o.weigh_by_noise);
+  r.set("kept_correction", f.kept_correction);
+  r.set("non_negative", non_negative_name(o.non_negative));
+  r.set("non_negative_limited_vertices", f.limited_vertices);
 }
 
 void record(Report& r, const BakeResult& res, const BakeOptions& o) {
@@ -137,6 +141,8 @@ void print_bake_summary(const Report& r) {
                                  "{seconds_fit_factor:3}, solve {seconds_fit_solve:3}; {fit_solver}" + cg +
                                  "), {solve_memory_mib:1} MiB; {fit_unsupported_vertices} vertices unsupported")
                             .c_str());
+    r.print(stdout, {"              weighed by noise: {kept_correction:%1} of the fit's correction kept on average; non-negative "
+                     "({non_negative}): {non_negative_limited_vertices} vertices limited"});
   }
   r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)",
                    "  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "

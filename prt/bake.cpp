@@ -44,13 +44,31 @@ void check_bake_options(const BakeOptions& o) {
     throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.fit.alpha));
 }
 
+namespace {
+
+// The variance of a chunk's three moment rows Σ_k w_k h_c(p_k) f_k, each summed over its K
+// values: the samples' rays are independent, so it is Σ_k (w_k h_c(p_k))² var f_k, with each
+// sample's variance from its own two ray halves. Positional error is left out: the samples are a
+// shifted lattice, whose stratification makes it small next to the rays' (and the difference of
+// a lattice's halves, its usual estimate, mistakes a shadow edge inside a face for noise).
+void chunk_variance(const SurfaceSamples& s, size_t first, size_t last, const double* variance, double* out) {
+  out[0] = out[1] = out[2] = 0;
+  for (size_t k = first; k < last; ++k, ++variance)
+    for (int c = 0; c < 3; ++c) {
+      const double wh = s.weight[k] * s.barycentric(static_cast<Eigen::Index>(k), c);
+      out[c] += wh * wh * *variance;
+    }
+}
+
+}  // namespace
+
 FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& samples,
                                const TransferOptions& options, TransferStats* stats, const ProgressFn& progress) {
   // Samples are traced in chunks of at most kChunk, each reduced to its three moment rows as
   // soon as it is traced: storing every sample's transfer would cost a row per sample and the
   // time to write it. A face's chunks are then summed in order, so the result does not depend
   // on the threads; chunks rather than faces, because one face may hold most of the samples
-  // (a floor) and one thread traces a chunk.
+  // (a floor) and one thread traces a chunk. Chunks are disjoint, so their variances add up.
   constexpr size_t kChunk = 64;
   const size_t F = mesh.num_faces();
   std::vector<size_t> chunk_begin{0}, first_chunk(F + 1, 0);
@@ -60,17 +78,22 @@ FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const Su
   }
   first_chunk[F] = chunk_begin.size() - 1;
   const Eigen::Index K = sh_count(options.order);
-  RowMatrixXd partial(static_cast<Eigen::Index>(3 * (chunk_begin.size() - 1)), K);
+  const size_t chunks = chunk_begin.size() - 1;
+  RowMatrixXd partial(static_cast<Eigen::Index>(3 * chunks), K);
+  std::vector<double> partial_variance(3 * chunks, 0.0);
   shadowed_transfer_groups(
       scene, samples.points, samples.normals, chunk_begin, options,
-      [&](size_t c, const double* values, size_t) {
+      [&](size_t c, const double* values, const double* variance, size_t) {
         sample_moments(samples, chunk_begin[c], chunk_begin[c + 1], values, K, partial.row(static_cast<Eigen::Index>(3 * c)).data());
+        chunk_variance(samples, chunk_begin[c], chunk_begin[c + 1], variance, partial_variance.data() + 3 * c);
       },
       stats, progress, &samples.offsets);
-  FaceMoments m{RowMatrixXd::Zero(static_cast<Eigen::Index>(3 * F), K)};
+  FaceMoments m{RowMatrixXd::Zero(static_cast<Eigen::Index>(3 * F), K), std::vector<double>(3 * F, 0.0)};
   for (size_t f = 0; f < F; ++f)
-    for (size_t c = first_chunk[f]; c < first_chunk[f + 1]; ++c)
+    for (size_t c = first_chunk[f]; c < first_chunk[f + 1]; ++c) {
       m.rows.middleRows(static_cast<Eigen::Index>(3 * f), 3) += partial.middleRows(static_cast<Eigen::Index>(3 * c), 3);
+      for (int k = 0; k < 3; ++k) m.variance[3 * f + size_t(k)] += partial_variance[3 * c + size_t(k)];
+    }
   return m;
 }
 
@@ -113,6 +136,8 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"alpha", std::to_string(o.fit.alpha)});
     m.push_back({"regularizer", regularizer_name(o.fit.regularizer)});
     m.push_back({"mass", mass_matrix_name(o.fit.mass)});
+    m.push_back({"noise_weighting", o.fit.weigh_by_noise ? "on" : "off"});
+    m.push_back({"non_negative", non_negative_name(o.fit.non_negative)});
   }
   m.push_back({"generator", std::string("prtsub ") + kVersion});
   return m;
@@ -123,8 +148,11 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
   so.estimate = o.estimate;
   so.transfer = o.transfer;
   TransferSignal signal(scene, so);
+  const size_t before = r.mesh.num_vertices();
   r.refine = refine_adaptive(r.mesh, r.transfer, signal, o.adaptive);
   r.rays += signal.rays();
+  r.point_variance.resize(r.mesh.num_vertices(), 0.0);
+  for (size_t i = before; i < r.mesh.num_vertices() && i < signal.variance().size(); ++i) r.point_variance[i] = signal.variance()[i];
   if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
 }
 
@@ -133,7 +161,7 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
   r.rays += r.fit_data.rays;
   r.seconds_samples = clock.lap();
   r.point = r.transfer;
-  r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit);
+  r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
@@ -169,7 +197,8 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   TransferStats stats;
   const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
   if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
-  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, o.transfer, &stats, progress.add, &offsets);
+  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, o.transfer, &stats, progress.add, &offsets,
+                                 &r.point_variance);
   r.rays = stats.rays;
   r.seconds_transfer = clock.lap();
   if (o.refine == Refinement::Adaptive) {

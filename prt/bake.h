@@ -66,6 +66,7 @@ struct BakeResult {
   Mesh mesh;             //!< the output mesh
   RowMatrixXd transfer;  //!< #V by N²: the asset's values (order-1 transfer for AO)
   RowMatrixXd point;     //!< #V by N²: the point-sampled values (equal to transfer when fit is point)
+  std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
   RefineStats refine;    //!< adaptive refinement's counts and times
   FitData fit_data;      //!< the samples (empty when fit is point)
   FitStats fit;
@@ -91,8 +92,8 @@ void check_bake_options(const BakeOptions& options);
 //! The fit's samples on `mesh` and their transfer (stage "samples").
 FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& options, const BakeProgress& progress = {});
 
-//! The samples' transfer, reduced to the fit's face moments as it is traced; the same for any
-//! thread count.
+//! The samples' transfer, reduced to the fit's face moments and their variances as it is traced;
+//! the same for any thread count.
 FaceMoments trace_face_moments(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& samples,
                                const TransferOptions& options, TransferStats* stats = nullptr, const ProgressFn& progress = {});
 

@@ -43,8 +43,10 @@
 
 #include "prtsub/prt/block_cg.h"
 #include "prtsub/prt/parallel.h"
+#include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/random.h"
 #include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
@@ -106,6 +108,9 @@ FitSolver parse_fit_solver(const std::string& n) {
   throw InputError("unknown fit solver '" + n + "' (auto, cholmod)");
 }
 const char* fit_solver_name(FitSolver s) { return s == FitSolver::Auto ? "auto" : "cholmod"; }
+const char* non_negative_name(NonNegative n) {
+  return n == NonNegative::Off ? "off" : n == NonNegative::Constant ? "constant" : "directions";
+}
 const char* fit_method_name(FitMethod m) {
   return m == FitMethod::Point ? "point" : m == FitMethod::Average ? "average" : "lsq";
 }
@@ -310,7 +315,7 @@ FaceMoments face_moments(const Mesh& mesh, const SurfaceSamples& s, const RowMat
   check_samples(mesh, s);
   if (static_cast<size_t>(values.rows()) != s.size()) throw InputError("fit: one row of values per sample expected");
   const Eigen::Index K = values.cols();
-  FaceMoments m{RowMatrixXd(static_cast<Eigen::Index>(3 * mesh.num_faces()), K)};
+  FaceMoments m{RowMatrixXd(static_cast<Eigen::Index>(3 * mesh.num_faces()), K), {}};
   for (size_t f = 0; f < mesh.num_faces(); ++f)
     sample_moments(s, s.begin[f], s.begin[f + 1], values.data() + static_cast<Eigen::Index>(s.begin[f]) * K, K,
                    m.rows.row(static_cast<Eigen::Index>(3 * f)).data());
@@ -564,8 +569,110 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
   return x;
 }
 
+namespace {
+
+// Per vertex, the mean over the faces around it of a per-vertex quantity at their corners: the
+// noise and bias estimates below are χ²-like with few degrees of freedom each, and the ring
+// averages them while following how they change over the surface.
+std::vector<double> ring_mean(const Mesh& mesh, const std::vector<double>& q) {
+  std::vector<double> sum(q.size(), 0.0), count(q.size(), 0.0);
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      sum[t[c]] += q[t[0]] + q[t[1]] + q[t[2]];
+      count[t[c]] += 3;
+    }
+  for (size_t i = 0; i < q.size(); ++i) sum[i] = count[i] > 0 ? sum[i] / count[i] : q[i];
+  return sum;
+}
+
+// The right-hand side's variance per vertex (summed over its K values): the moments' variances
+// of the faces around it.
+std::vector<double> rhs_variance(const Mesh& mesh, const FaceMoments& m) {
+  std::vector<double> v(mesh.num_vertices(), 0.0);
+  for (size_t f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 3; ++c) v[mesh.triangles[f][c]] += m.variance[3 * f + size_t(c)];
+  return v;
+}
+
+// kProbes seeded ±1 columns scaled by the right-hand side's standard deviation: solved with the
+// system, their squared solutions average to the fit's variance at each vertex (b's noise
+// propagated through (A + αR)⁻¹, which a lumped mass would underestimate several times over).
+constexpr int kProbes = 4;
+void append_probes(FitSystem& sys, const std::vector<double>& var_b) {
+  const Eigen::Index n = sys.rhs.rows(), K = sys.rhs.cols();
+  sys.rhs.conservativeResize(n, K + kProbes);
+  Rng rng(0x9b0be5ull, 0);
+  for (size_t i = 0; i < sys.slot.size(); ++i) {
+    if (sys.slot[i] < 0) continue;
+    const Eigen::Index r = sys.slot[i];
+    for (int k = 0; k < kProbes; ++k) sys.rhs(r, K + k) = sys.scale[r] * std::sqrt(var_b[i]) * ((rng.next() & 1) ? 1.0 : -1.0);
+  }
+}
+
+// x = prior + s (x − prior) per vertex, s the share of the correction that minimises the
+// expected squared error of the mix when the prior carries a bias β² and noise σp² and the fit
+// noise σf²: s = (β² + σp²) / (β² + σp² + σf²), with β² = ‖x − prior‖² − σf² − σp² (at least 0).
+double weigh_by_noise(const Mesh& mesh, const std::vector<double>& var_f, const std::vector<double>& prior_variance,
+                      const RowMatrixXd& prior, RowMatrixXd& x) {
+  const size_t V = mesh.num_vertices();
+  std::vector<double> d2(V);
+  for (size_t i = 0; i < V; ++i) d2[i] = (x.row(static_cast<Eigen::Index>(i)) - prior.row(static_cast<Eigen::Index>(i))).squaredNorm();
+  const std::vector<double> vf = ring_mean(mesh, var_f), vp = ring_mean(mesh, prior_variance), dd = ring_mean(mesh, d2);
+  double kept = 0;
+  for (size_t i = 0; i < V; ++i) {
+    double share = 1;
+    if (!std::isfinite(vp[i])) share = 1;       // the prior's noise is unknown: keep the fit
+    else if (!std::isfinite(vf[i])) share = 0;  // the fit's is: keep the prior
+    else {
+      const double bias2 = std::max(0.0, dd[i] - vf[i] - vp[i]);
+      const double denominator = bias2 + vp[i] + vf[i];
+      share = denominator > 0 ? (bias2 + vp[i]) / denominator : 1;
+    }
+    const auto r = static_cast<Eigen::Index>(i);
+    x.row(r) = prior.row(r) + share * (x.row(r) - prior.row(r));
+    kept += share;
+  }
+  return V ? kept / static_cast<double>(V) : 1;
+}
+
+// Constant: clamps each vertex's DC coefficient at 0 (a constant light sees nothing else, and
+// the other coefficients keep the fit). Directions: first pulls each vertex towards its prior,
+// x = prior + s (x − prior) with the largest s in [0, 1], until its transfer function
+// T(ω) = Σ x_k y_k(ω) is at least min(0, min T_prior) at a fixed set of directions (linear in s).
+// Interpolation across a triangle mixes vertex functions convexly, so both bounds hold there.
+size_t keep_non_negative(const RowMatrixXd& prior, RowMatrixXd& x, NonNegative mode, int threads) {
+  if (mode == NonNegative::Off) return 0;
+  const Eigen::Index K = x.cols();
+  const int order = static_cast<int>(std::lround(std::sqrt(double(K))));
+  constexpr int kDirections = 128;
+  RowMatrixXd Y(kDirections, K);  // SH at a Fibonacci sphere
+  const bool directions = mode == NonNegative::Directions && order * order == K;
+  for (int d = 0; d < kDirections && directions; ++d) {
+    const double z = 1 - (2.0 * d + 1) / kDirections, r = std::sqrt(std::max(0.0, 1 - z * z)), phi = 2.399963229728653 * d;
+    sh_eval(order, r * std::cos(phi), r * std::sin(phi), z, Y.row(d).data());
+  }
+  std::vector<char> limited(static_cast<size_t>(x.rows()), 0);
+  parallel_range(x.rows(), threads, Eigen::Index(256), [&](const tbb::blocked_range<Eigen::Index>& range) {
+    for (Eigen::Index i = range.begin(); i < range.end(); ++i) {
+      if (directions) {
+        const Eigen::VectorXd tp = Y * prior.row(i).transpose(), tx = Y * x.row(i).transpose();
+        const double floor = std::min(0.0, tp.minCoeff());
+        double share = 1;
+        for (int d = 0; d < kDirections; ++d)
+          if (tx[d] < floor && tp[d] > tx[d]) share = std::min(share, (tp[d] - floor) / (tp[d] - tx[d]));
+        if (share < 1) x.row(i) = prior.row(i) + std::max(share, 0.0) * (x.row(i) - prior.row(i)), limited[size_t(i)] = 1;
+      }
+      if (x(i, 0) < 0) x(i, 0) = 0, limited[size_t(i)] = 1;
+    }
+  });
+  return static_cast<size_t>(std::count(limited.begin(), limited.end(), 1));
+}
+
+}  // namespace
+
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments,
-                              const RowMatrixXd& prior, const FitOptions& o, FitStats* stats_out) {
+                              const RowMatrixXd& prior, const FitOptions& o, FitStats* stats_out,
+                              const std::vector<double>* prior_variance) {
   check_fit_inputs(mesh, s, moments, prior, o);
   FitStats stats;
   stats.unknowns = mesh.num_vertices();
@@ -585,9 +692,23 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     x = average_values(sums, free, prior);
     stats.seconds_assemble = clock.total();
   } else {
-    const FitSystem system = assemble_fit_system(mesh, s, moments, prior, o, &stats);
+    FitSystem system = assemble_fit_system(mesh, s, moments, prior, o, &stats);
+    const bool weigh = o.weigh_by_noise && prior_variance && moments.variance.size() == 3 * mesh.num_faces() &&
+                       prior_variance->size() == mesh.num_vertices();
+    const Eigen::Index K = prior.cols();
+    if (weigh) append_probes(system, rhs_variance(mesh, moments));
+    RowMatrixXd start = prior;
+    if (weigh) start.conservativeResize(Eigen::NoChange, K + kProbes), start.rightCols(kProbes).setZero();
     FitSystemSolver solver(system, o);
-    x = solver.solve(prior, &stats);
+    x = solver.solve(start, &stats);
+    if (weigh) {
+      std::vector<double> var_f(mesh.num_vertices());
+      for (size_t i = 0; i < var_f.size(); ++i)
+        var_f[i] = system.slot[i] < 0 ? INFINITY : x.row(static_cast<Eigen::Index>(i)).rightCols(kProbes).squaredNorm() / kProbes;
+      x.conservativeResize(Eigen::NoChange, K);
+      stats.kept_correction = weigh_by_noise(mesh, var_f, *prior_variance, prior, x);
+    }
+    stats.limited_vertices = keep_non_negative(prior, x, o.non_negative, o.threads);
     if (o.mass == MassMatrix::Sampled && static_cast<double>(s.size()) < 8.0 * static_cast<double>(mesh.num_faces()))
       stats.warning = "fit: the sampled mass matrix with under 8 samples per triangle extrapolates vertices that samples barely "
                       "see; errors can be far above point sampling (docs/fit.md). Prefer the analytic mass matrix.";

@@ -19,6 +19,13 @@ enum class MassMatrix { Analytic, Sampled };
 //! Auto: conjugate gradients with the analytic mass matrix, falling back to CHOLMOD if they do
 //! not converge; CHOLMOD's Cholesky factorisation for the sampled one. Cholmod: always CHOLMOD.
 enum class FitSolver { Auto, Cholmod };
+//! What the fit may not do that the point samples never do: go negative.
+//!  - Off: nothing.
+//!  - Constant: each vertex's DC coefficient is at least 0, so no constant light (of any colour
+//!    or strength) gives negative radiance anywhere, interpolated or not.
+//!  - Directions: also pull each vertex towards its prior until its transfer function is at least
+//!    min(0, the prior's minimum) at 128 directions, so that narrow lights (a sun) do not either.
+enum class NonNegative { Off, Constant, Directions };
 
 FitMethod parse_fit_method(const std::string& name);        //!< point, average, lsq
 Regularizer parse_regularizer(const std::string& name);     //!< edge, gradient
@@ -28,11 +35,14 @@ const char* fit_method_name(FitMethod m);
 const char* regularizer_name(Regularizer r);
 const char* mass_matrix_name(MassMatrix m);
 const char* fit_solver_name(FitSolver s);
+const char* non_negative_name(NonNegative n);
 
 struct FitOptions {
   FitMethod method = FitMethod::LeastSquares;
   Regularizer regularizer = Regularizer::Edge;
-  double alpha = 0.1;  //!< weight of the regulariser; 0 is the plain least-squares optimum
+  //! weight of the regulariser; 0 is the plain least-squares optimum. The paper recommends 0.1
+  //! for its estimator; weighed by noise, 0.04 measured best over the shared scenes (BENCHMARKS.md)
+  double alpha = 0.04;
   MassMatrix mass = MassMatrix::Analytic;
   //! Analytic mass: estimate b as A·prior + Monte Carlo of ∫h_i (f − g_prior), so that b's
   //! sampling error scales with f − g_prior instead of f (off: the paper's plain estimate).
@@ -41,6 +51,11 @@ struct FitOptions {
   double cg_tolerance = 1e-10;  //!< relative residual of the Jacobi-scaled system, per column
   int cg_max_iterations = 100;  //!< beyond this (or when CG predicts it), CHOLMOD takes over
   int threads = 0;     //!< for the iterative solve; 0: every core (the result does not depend on it)
+  //! Keep of each vertex's correction (fit − prior) the share its noise allows: where the
+  //! correction is mostly the samples' noise, the point sample stays; where it is systematic
+  //! (a shadow inside a face), the fit does. Needs the moments' and the prior's variances.
+  bool weigh_by_noise = true;
+  NonNegative non_negative = NonNegative::Constant;
 };
 
 struct FitStats {
@@ -53,6 +68,9 @@ struct FitStats {
   double solve_memory_mib = 0;     //!< system plus factor (or CG's vectors) plus right-hand sides, as stored
   double stabilizer = 0;           //!< λ of the pull towards the prior that was needed (0: none)
   double seconds_assemble = 0, seconds_factor = 0, seconds_solve = 0;
+  //! weigh_by_noise: the mean share of the fit's correction kept (1: the fit, 0: the prior)
+  double kept_correction = 1;
+  size_t limited_vertices = 0;     //!< non_negative: vertices whose values it changed
   std::string warning;             //!< non-empty when the fallback was used
 };
 
@@ -74,6 +92,8 @@ SparseMatrixd edge_regularizer(const Mesh& mesh, size_t* interior_edges = nullpt
 //! of its size. Row 3f + c is Σ w_k h_c(p_k) f(p_k) over face f's samples k.
 struct FaceMoments {
   RowMatrixXd rows;  //!< 3#F by K
+  //! 3#F, or empty when unknown: the estimated variance of row 3f + c (summed over its K values)
+  std::vector<double> variance;
 };
 
 //! The three moment rows of samples first .. last-1, all on one face, from their values (one
@@ -142,8 +162,11 @@ class FitSystemSolver {
 //! \param prior #V by K: the point-sampled values (what Point returns)
 //! \return #V by K, all finite
 //! \throw SolverError if no stabilised system factorises, InputError for bad shapes or α
+//! \param prior_variance #V estimated variances of the prior's rows (shadowed_transfer's), or null:
+//!        without it (or without moments.variance) weigh_by_noise does nothing
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, const FaceMoments& moments,
-                              const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
+                              const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr,
+                              const std::vector<double>* prior_variance = nullptr);
 
 //! The same from stored sample values (#S by K).
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values,

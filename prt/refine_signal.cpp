@@ -105,8 +105,13 @@ void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const R
   TransferOptions o = options_.transfer;
   o.stream_offset = batch.front().index;
   TransferStats stats;
-  values = shadowed_transfer(scene_, points, normals, o, &stats, {}, &offsets);
+  std::vector<double> variance;
+  values = shadowed_transfer(scene_, points, normals, o, &stats, {}, &offsets, &variance);
   rays_ += stats.rays;
+  for (size_t i = 0; i < batch.size(); ++i) {
+    if (batch[i].index >= variance_.size()) variance_.resize(batch[i].index + 1, 0.0);
+    variance_[batch[i].index] = variance[i];
+  }
 }
 
 }  // namespace prtsub

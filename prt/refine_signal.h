@@ -47,11 +47,15 @@ class TransferSignal : public RefinementSignal {
   void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd& parent_values, RowMatrixXd& values) override;
   void probe_faces(const std::vector<FaceProbe>& faces, std::vector<double>& extra) override;
   uint64_t rays() const { return rays_; }
+  //! The estimated variance of every vertex this signal computed, by render-vertex index (0 for
+  //! vertices it did not compute): see shadowed_transfer.
+  const std::vector<double>& variance() const { return variance_; }
 
  private:
   const RayScene& scene_;
   TransferSignalOptions options_;
   uint64_t rays_ = 0;
+  std::vector<double> variance_;
 };
 
 }  // namespace prtsub

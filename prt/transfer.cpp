@@ -89,12 +89,15 @@ void check_transfer_options(const TransferOptions& o) {
 
 namespace {
 
-// One point's transfer into row (K values).
+// One point's transfer into row (K values), and optionally its estimated variance (summed over
+// the K values): the two halves are each an unbiased estimate, t = (n_A t_A + n_B t_B) / R, so
+// with per-ray variance σ² the result's is σ²/R = E‖t_A − t_B‖² · n_A n_B / R².
 void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
-                    const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, PointRays& buf, double* row) {
+                    const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, PointRays& buf, double* row,
+                    double* variance) {
   const int K = sh_count(opt.order);
   double y[kMaxShOrder * kMaxShOrder];
-  double acc[kMaxShOrder * kMaxShOrder];
+  double acc[kMaxShOrder * kMaxShOrder], acc_a[kMaxShOrder * kMaxShOrder];
   const uint32_t R = static_cast<uint32_t>(opt.rays);
   trace_point(scene, points, normals, offsets, i, opt, buf);
   // Visible counts of the even (A) and odd (B) halves.
@@ -105,6 +108,7 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
   beta[0] = size[1] ? (2 * visible[1] >= size[1] ? 1.0 : 0.0) : 1.0;
   beta[1] = 2 * visible[0] >= size[0] ? 1.0 : 0.0;
   std::fill(acc, acc + K, 0.0);
+  std::fill(acc_a, acc_a + K, 0.0);
   for (uint32_t k = 0; k < R; ++k) {
     double v = occluded(buf.rays[k]) ? 0.0 : 1.0;
     double w = v - beta[k & 1];
@@ -112,15 +116,26 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
     const Eigen::Vector3d& d = buf.directions[k];
     sh_eval(opt.order, d.x(), d.y(), d.z(), y);
     for (int c = 0; c < K; ++c) acc[c] += w * y[c];
+    if (variance && (k & 1) == 0)
+      for (int c = 0; c < K; ++c) acc_a[c] += w * y[c];
   }
   const double scale = M_PI / R;
   const double beta_mean = (size[0] * beta[0] + size[1] * beta[1]) / R;
-  if (beta_mean != 0.0) {
-    unshadowed_transfer(opt.order, normals.row(i).transpose(), row);
-    for (int c = 0; c < K; ++c) row[c] = beta_mean * row[c] + scale * acc[c];
-  } else {
-    for (int c = 0; c < K; ++c) row[c] = scale * acc[c];
+  double unshadowed[kMaxShOrder * kMaxShOrder];
+  if (beta_mean != 0.0 || (variance && beta[0] != beta[1])) unshadowed_transfer(opt.order, normals.row(i).transpose(), unshadowed);
+  for (int c = 0; c < K; ++c) row[c] = (beta_mean != 0.0 ? beta_mean * unshadowed[c] : 0.0) + scale * acc[c];
+  if (!variance) return;
+  if (size[1] == 0) {
+    *variance = INFINITY;  // one ray: nothing to compare it with
+    return;
   }
+  double d2 = 0;
+  for (int c = 0; c < K; ++c) {
+    const double a = M_PI * acc_a[c] / size[0], b = M_PI * (acc[c] - acc_a[c]) / size[1];
+    const double d = (beta[0] != beta[1] ? (beta[0] - beta[1]) * unshadowed[c] : 0.0) + a - b;
+    d2 += d * d;
+  }
+  *variance = d2 * size[0] * size[1] / (double(R) * R);
 }
 
 void finish_stats(const RayScene& scene, TransferStats* stats, const Stopwatch& clock, Eigen::Index points,
@@ -136,15 +151,17 @@ void finish_stats(const RayScene& scene, TransferStats* stats, const Stopwatch& 
 
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& opt,
-                              TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets) {
+                              TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets,
+                              std::vector<double>* variance) {
   check_transfer_options(opt);
   const Eigen::Index P = points.rows();
   RowMatrixXd out(P, sh_count(opt.order));
+  if (variance) variance->assign(static_cast<size_t>(P), 0.0);
   const Stopwatch clock;
   parallel_range(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i)
-      point_transfer(scene, points, normals, offsets, i, opt, buf, out.row(i).data());
+      point_transfer(scene, points, normals, offsets, i, opt, buf, out.row(i).data(), variance ? variance->data() + i : nullptr);
     if (progress) progress(static_cast<size_t>(range.size()));
   });
   finish_stats(scene, stats, clock, P, opt.rays);
@@ -166,14 +183,16 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
   const Stopwatch clock;
   parallel_range(G, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
-    thread_local std::vector<double> values;
+    thread_local std::vector<double> values, variance;
     size_t done = 0;
     for (Eigen::Index g = range.begin(); g != range.end(); ++g) {
       const size_t first = group_begin[size_t(g)], last = group_begin[size_t(g) + 1];
       values.resize((last - first) * size_t(K));
+      variance.resize(last - first);
       for (size_t i = first; i < last; ++i)
-        point_transfer(scene, points, normals, offsets, static_cast<Eigen::Index>(i), opt, buf, values.data() + (i - first) * size_t(K));
-      consume(size_t(g), values.data(), last - first);
+        point_transfer(scene, points, normals, offsets, static_cast<Eigen::Index>(i), opt, buf, values.data() + (i - first) * size_t(K),
+                       variance.data() + (i - first));
+      consume(size_t(g), values.data(), variance.data(), last - first);
       done += last - first;
     }
     if (progress) progress(done);

@@ -32,15 +32,19 @@ struct TransferStats {
 //! \param normals #P by 3 unit shading normals
 //! \param offsets #P by 3 unit directions to move ray origins off the surface (default: the
 //!        normals); see vertex_offset_directions
+//! \param variance if given, receives #P estimates of each result's variance, summed over its
+//!        N² values, from the disagreement of the estimator's two independent halves (infinite
+//!        with a single ray); an unoccluded point's is 0
 //! \return #P by N² row-major transfer
 //! \throw InputError for an order or ray count out of range, EmbreeError on Embree failure
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& options,
                               TransferStats* stats = nullptr, const ProgressFn& progress = {},
-                              const RowMatrixX3d* offsets = nullptr);
+                              const RowMatrixX3d* offsets = nullptr, std::vector<double>* variance = nullptr);
 
-//! Called from worker threads with one group's transfer: `rows` rows of N² values, row-major.
-using GroupFn = std::function<void(size_t group, const double* values, size_t rows)>;
+//! Called from worker threads with one group's transfer: `rows` rows of N² values, row-major,
+//! and each row's estimated variance (summed over its values; see shadowed_transfer).
+using GroupFn = std::function<void(size_t group, const double* values, const double* variance, size_t rows)>;
 
 //! The same transfer, handed over group by group instead of stored: group g is points
 //! group_begin[g] .. group_begin[g+1]-1, and consume sees each group once, from some worker.

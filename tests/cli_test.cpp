@@ -110,6 +110,11 @@ TEST_F(Cli, EvalFitsReportsThePapersFourErrorsAndBenchTimesTheFit) {
   EXPECT_LT(avg, point);
   EXPECT_LT(lsq, avg);
   EXPECT_LT(alpha, point);
+  // The default (noise-weighted, non-negative) never loses to point sampling on its own rays.
+  const double fit_default = number("e_default_percent");
+  EXPECT_LE(fit_default, point);
+  EXPECT_GT(number("kept_correction"), 0.0);
+  EXPECT_LE(number("kept_correction"), 1.0);
   EXPECT_GT(number("samples"), 82 * 16 - 1);
   EXPECT_GE(number("solve_memory_mib_alpha"), 0.0);
   EXPECT_GT(number("noise_floor_percent"), 0.0);

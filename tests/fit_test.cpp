@@ -8,9 +8,19 @@
 #include "helpers.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sh.h"
 
 namespace prtsub {
 namespace {
+
+// The estimator itself, as the paper states it: these tests check its mathematics on signals
+// that may be negative, so the transfer-only limit (non_negative) is off. (The noise weighting
+// needs vertex variances, which these calls do not pass.)
+FitOptions plain_fit() {
+  FitOptions o;
+  o.non_negative = NonNegative::Off;
+  return o;
+}
 
 using Signal = std::function<double(const Eigen::Vector3d&)>;
 
@@ -223,7 +233,7 @@ FitRun run_fits(const Mesh& m, const Signal& f, const SampleOptions& so, double 
   const RowMatrixXd values = at_samples(s, f);
   FitRun r;
   r.point = at_vertices(m, f);
-  FitOptions o;
+  FitOptions o = plain_fit();
   o.method = FitMethod::Average;
   r.average = fit_vertex_values(m, s, values, r.point, o);
   o.method = FitMethod::LeastSquares;
@@ -278,7 +288,7 @@ TEST(Fit, LeastSquaresBeatsAverageBeatsPointOnAShadowEdge) {
   const double mean_excess = (A.ldlt().solve(C)).trace();
   // That theory is for the plain estimate of b; the control variate (the default) estimates only
   // ∫h_i (f − g_prior), and must do far better.
-  FitOptions plain;
+  FitOptions plain = plain_fit();
   plain.alpha = 0, plain.control_variate = false;
   const RowMatrixXd x_plain = fit_vertex_values(m, s, at_samples(s, sigmoid), r.point, plain);
   const double e_plain = l2_error(m, x_plain, sigmoid);
@@ -295,7 +305,7 @@ TEST(Fit, SampledMassAndEdgeRegularizerReproduceLinearSignalsExactly) {
   Mesh m = test::build(grid(6, 0.5));
   const Signal f = [](const Eigen::Vector3d& p) { return 0.3 + 2 * p.x() - 5 * p.y(); };
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
-  FitOptions o;
+  FitOptions o = plain_fit();
   o.mass = MassMatrix::Sampled, o.alpha = 0.1;
   const RowMatrixXd prior = RowMatrixXd::Zero(Eigen::Index(m.num_vertices()), 1);
   FitStats st;
@@ -313,7 +323,8 @@ TEST(Fit, ManyRightHandSidesMatchADenseSolveColumnByColumn) {
   for (Eigen::Index i = 0; i < values.rows(); ++i)
     for (int k = 0; k < 100; ++k) values(i, k) = std::sin(k * s.points(i, 0) + 0.1 * k) + s.points(i, 2) * k;
   const RowMatrixXd prior = RowMatrixXd::Zero(Eigen::Index(m.num_vertices()), 100);
-  FitOptions o;
+  FitOptions o = plain_fit();
+  o.alpha = 0.1;  // CG stops at a relative residual of 1e-10; at α = 0.1 this system's condition keeps the error under 1e-10 too
   RowMatrixXd x = fit_vertex_values(m, s, values, prior, o);
   Eigen::MatrixXd M = Eigen::MatrixXd(mass_matrix(m, s, MassMatrix::Analytic)) + o.alpha * Eigen::MatrixXd(edge_regularizer(m));
   Eigen::MatrixXd b = fit_right_hand_side(m, s, values);
@@ -333,7 +344,7 @@ TEST(Fit, ConjugateGradientsAgreeWithCholmodAndFallBackWhenTheyStall) {
     for (int k = 0; k < 16; ++k) prior(i, k) = std::cos(k * m.point(uint32_t(i)).y());
   for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient})
     for (double alpha : {0.0, 0.1, 1.0, 10.0}) {
-      FitOptions o;
+      FitOptions o = plain_fit();
       o.regularizer = reg, o.alpha = alpha;
       FitStats cg_stats, direct_stats;
       const RowMatrixXd cg = fit_vertex_values(m, s, values, prior, o, &cg_stats);
@@ -352,7 +363,7 @@ TEST(Fit, ConjugateGradientsAgreeWithCholmodAndFallBackWhenTheyStall) {
           << regularizer_name(reg) << " alpha " << alpha;
     }
   // Too few iterations allowed: CHOLMOD takes over, the stats say so, and it gives its own answer.
-  FitOptions o;
+  FitOptions o = plain_fit();
   o.cg_max_iterations = 2;
   FitStats st;
   const RowMatrixXd x = fit_vertex_values(m, s, values, prior, o, &st);
@@ -383,7 +394,7 @@ TEST(FitStability, SliversBelowOneHundredthOfADegree) {
   const Signal lin = [](const Eigen::Vector3d& p) { return 1 + p.x() + 2 * p.y(); };
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient}) {
-    FitOptions o;
+    FitOptions o = plain_fit();
     o.mass = MassMatrix::Sampled, o.regularizer = reg, o.alpha = reg == Regularizer::Edge ? 0.1 : 0.0;
     RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, lin), at_vertices(m, lin), o);
     ASSERT_TRUE(x.allFinite());
@@ -439,7 +450,7 @@ TEST(FitStability, NearZeroAreaTrianglesIsolatedAndUnsampledVertices) {
   ASSERT_EQ(s.begin[m.num_faces()], s.begin[grid_faces]);  // no samples beyond the grid
   gs.begin.resize(grid_faces + 1);
   for (double alpha : {0.0, 0.1}) {
-    FitOptions o;
+    FitOptions o = plain_fit();
     o.alpha = alpha;
     FitStats st;
     RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, f), prior, o, &st);
@@ -457,7 +468,7 @@ TEST(FitStability, TranslationAndScaleDoNotChangeTheResult) {
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   const RowMatrixXd values = at_samples(s, sigmoid), prior = at_vertices(m, sigmoid);
   for (Regularizer reg : {Regularizer::Edge, Regularizer::Gradient}) {
-    FitOptions o;
+    FitOptions o = plain_fit();
     o.regularizer = reg;
     const RowMatrixXd x = fit_vertex_values(m, s, values, prior, o);
     for (auto [scale, offset] : {std::pair{1.0, 1e6}, std::pair{1e-4, 0.0}}) {
@@ -490,7 +501,7 @@ TEST(FitStability, SingularMassMatrixFallsBackToThePointValues) {
   SurfaceSamples s = make_surface_samples(m, so);
   ASSERT_EQ(s.size(), 10u);
   const Signal f = [](const Eigen::Vector3d& p) { return std::sin(p.x()) + p.y(); };
-  FitOptions o;
+  FitOptions o = plain_fit();
   o.mass = MassMatrix::Sampled, o.alpha = 0;
   FitStats st;
   const RowMatrixXd prior = at_vertices(m, f);
@@ -513,7 +524,7 @@ TEST(FitStability, BadInputIsAnErrorNotNaN) {
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   RowMatrixXd values = RowMatrixXd::Ones(Eigen::Index(s.size()), 1);
   const RowMatrixXd prior = RowMatrixXd::Ones(Eigen::Index(m.num_vertices()), 1);
-  FitOptions o;
+  FitOptions o = plain_fit();
   o.alpha = -1;
   EXPECT_THROW(fit_vertex_values(m, s, values, prior, o), InputError);
   o.alpha = 0.1;
@@ -521,6 +532,152 @@ TEST(FitStability, BadInputIsAnErrorNotNaN) {
   EXPECT_THROW(fit_vertex_values(m, s, values, prior, o), InputError);
   EXPECT_THROW(fit_vertex_values(m, s, RowMatrixXd::Ones(3, 1), prior, o), InputError);
   EXPECT_THROW(parse_fit_method("spline"), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+// Moments of exact sample values (K columns: f times 1, 2, ..., K) plus seeded Gaussian noise of
+// standard deviation sigma in each, with the noise's variance (summed over the K columns) as the
+// moments' variance: what trace_face_moments reports.
+FaceMoments noisy_moments(const Mesh& m, const SurfaceSamples& s, const Signal& f, double sigma, uint64_t seed, int K = 1) {
+  RowMatrixXd values(Eigen::Index(s.size()), K);
+  Rng rng(seed, 0);
+  for (Eigen::Index i = 0; i < values.rows(); ++i)
+    for (int k = 0; k < K; ++k) {
+      const double u1 = std::max(rng.uniform(), 1e-300), u2 = rng.uniform();
+      values(i, k) = (k + 1) * f(s.points.row(i).transpose()) + sigma * std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+    }
+  FaceMoments moments = face_moments(m, s, values);
+  moments.variance.assign(3 * m.num_faces(), 0.0);
+  for (size_t k = 0; k < s.size(); ++k)
+    for (int c = 0; c < 3; ++c) {
+      const double wh = s.weight[k] * s.barycentric(Eigen::Index(k), c);
+      moments.variance[3 * s.face[k] + size_t(c)] += wh * wh * sigma * sigma * K;
+    }
+  return moments;
+}
+
+// The same K columns at the vertices, exactly.
+RowMatrixXd columns_at_vertices(const Mesh& m, const Signal& f, int K) {
+  RowMatrixXd v(Eigen::Index(m.num_vertices()), K);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i)
+    for (int k = 0; k < K; ++k) v(i, k) = (k + 1) * f(m.point(i));
+  return v;
+}
+
+TEST(FitNoise, WhereTheCorrectionIsNoiseThePointSamplesStay) {
+  // A fine grid and a linear signal in 16 columns (as order-4 transfer has): the point samples
+  // hold it exactly (up to their stated, tiny noise), the interpolant has no bias, and the
+  // samples are very noisy. The fit's correction is pure noise: weighed by noise, most of it
+  // goes. (A positive-part shrinkage keeps a little where a vertex's noisy ‖x − prior‖² happens to
+  // look like bias; with 16 columns that is rare.)
+  const int K = 16;
+  const Mesh m = test::build(grid(16));
+  const Signal f = [](const Eigen::Vector3d& p) { return 0.2 + 0.5 * p.x() - 0.3 * p.y(); };
+  SampleOptions so;
+  so.per_triangle = 8;
+  const SurfaceSamples s = make_surface_samples(m, so);
+  const FaceMoments moments = noisy_moments(m, s, f, 0.5, 3, K);
+  const RowMatrixXd prior = columns_at_vertices(m, f, K);
+  const std::vector<double> prior_variance(m.num_vertices(), 1e-8);
+  FitOptions o = plain_fit();
+  FitStats plain_stats, weighed_stats;
+  const RowMatrixXd plain = fit_vertex_values(m, s, moments, prior, o, &plain_stats);
+  const RowMatrixXd weighed = fit_vertex_values(m, s, moments, prior, o, &weighed_stats, &prior_variance);
+  const double e_plain = (plain - prior).norm(), e_weighed = (weighed - prior).norm();  // the prior is exact
+  EXPECT_GT(e_plain, 1.0);                 // the noise is real
+  EXPECT_LT(e_weighed, 0.2 * e_plain);     // and mostly removed (measured: 0.106 of it)
+  EXPECT_LT(weighed_stats.kept_correction, 0.1);  // measured: 5.1%
+  EXPECT_EQ(plain_stats.kept_correction, 1.0);
+  // Without the vertices' variances there is nothing to weigh: the plain fit.
+  EXPECT_EQ(fit_vertex_values(m, s, moments, prior, o), plain);
+  std::printf("noise only: error %.4g plain, %.4g weighed by noise; %.1f%% of the correction kept\n", e_plain, e_weighed,
+              100 * weighed_stats.kept_correction);
+}
+
+TEST(FitNoise, WhereTheCorrectionIsSystematicTheFitStays) {
+  // A coarse grid and a sharp step inside its faces: point samples miss it, exact samples (no
+  // noise: variance 0) see it. The whole correction is kept: the weighed fit is the plain fit.
+  const Mesh m = test::build(grid(4));
+  SampleOptions so;
+  so.per_triangle = 64;
+  const SurfaceSamples s = make_surface_samples(m, so);
+  const FaceMoments moments = noisy_moments(m, s, sigmoid, 0.0, 1);
+  const RowMatrixXd prior = at_vertices(m, sigmoid);
+  const std::vector<double> prior_variance(m.num_vertices(), 1e-4);
+  FitOptions o = plain_fit();
+  o.alpha = 0;  // the L2 projection: it cannot be further from the signal than the interpolant
+  o.weigh_by_noise = false;
+  const RowMatrixXd plain = fit_vertex_values(m, s, moments, prior, o);
+  o.weigh_by_noise = true;
+  FitStats stats;
+  const RowMatrixXd weighed = fit_vertex_values(m, s, moments, prior, o, &stats, &prior_variance);
+  EXPECT_EQ(stats.kept_correction, 1.0);
+  EXPECT_LT((weighed - plain).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT(l2_error(m, weighed, sigmoid), 0.8 * l2_error(m, prior, sigmoid));  // and the fit is what helps
+}
+
+TEST(FitNonNegative, ConstantKeepsEveryDcCoefficientAtOrAboveZero) {
+  // A step from 0 to 1 on a coarse grid: the L2 projection overshoots below 0 beside the step
+  // (the hat functions' Gibbs effect), where every point sample is ≥ 0. Constant clamps exactly
+  // those DC coefficients and changes nothing else.
+  const Mesh m = test::build(grid(4));
+  const Signal step = [](const Eigen::Vector3d& p) { return p.x() > 0.37 ? 1.0 : 0.0; };
+  SampleOptions so;
+  so.per_triangle = 256;
+  const SurfaceSamples s = make_surface_samples(m, so);
+  const RowMatrixXd values = at_samples(s, step), prior = at_vertices(m, step);
+  FitOptions o = plain_fit();
+  o.alpha = 0;
+  const RowMatrixXd plain = fit_vertex_values(m, s, values, prior, o);
+  const auto negative = (plain.col(0).array() < 0).count();
+  ASSERT_GT(negative, 0);  // the case is real
+  o.non_negative = NonNegative::Constant;
+  FitStats stats;
+  const RowMatrixXd limited = fit_vertex_values(m, s, face_moments(m, s, values), prior, o, &stats);
+  EXPECT_GE(limited.col(0).minCoeff(), 0.0);
+  EXPECT_EQ(stats.limited_vertices, static_cast<size_t>(negative));
+  for (Eigen::Index i = 0; i < plain.rows(); ++i) EXPECT_EQ(limited(i, 0), std::max(plain(i, 0), 0.0));
+}
+
+TEST(FitNonNegative, DirectionsKeepTheTransferFunctionAboveThePriorsMinimum) {
+  // Order 2 (4 coefficients): an unshadowed cosine lobe, 0 on the lower hemisphere, rotated by a
+  // step across the grid; the fit's mix of the two lobes overshoots into negative values. At the
+  // 128 Fibonacci directions of keep_non_negative, the limited transfer function stays at or above
+  // min(0, the prior's minimum there), vertex by vertex.
+  const Mesh m = test::build(grid(4));
+  SampleOptions so;
+  so.per_triangle = 128;
+  const SurfaceSamples s = make_surface_samples(m, so);
+  const Eigen::VectorXd up = unshadowed_transfer(2, Eigen::Vector3d::UnitZ()), side = unshadowed_transfer(2, Eigen::Vector3d::UnitX());
+  auto lobe = [&](const Eigen::Vector3d& p) { return p.x() > 0.37 ? side : up; };
+  RowMatrixXd values(Eigen::Index(s.size()), 4), prior(Eigen::Index(m.num_vertices()), 4);
+  for (Eigen::Index i = 0; i < values.rows(); ++i) values.row(i) = lobe(s.points.row(i).transpose()).transpose();
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) prior.row(i) = lobe(m.point(i)).transpose();
+  FitOptions o = plain_fit();
+  o.alpha = 0;
+  o.non_negative = NonNegative::Directions;
+  FitStats stats;
+  const RowMatrixXd x = fit_vertex_values(m, s, values, prior, o, &stats);
+  EXPECT_GT(stats.limited_vertices, 0u);
+  RowMatrixXd Y(128, 4);
+  for (int d = 0; d < 128; ++d) {
+    const double z = 1 - (2.0 * d + 1) / 128, r = std::sqrt(std::max(0.0, 1 - z * z)), phi = 2.399963229728653 * d;
+    sh_eval(2, r * std::cos(phi), r * std::sin(phi), z, Y.row(d).data());
+  }
+  const RowMatrixXd plain_x = fit_vertex_values(m, s, values, prior, plain_fit());
+  bool plain_went_below = false;
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    const double floor = std::min(0.0, (Y * prior.row(i).transpose()).minCoeff());
+    EXPECT_GE((Y * x.row(i).transpose()).minCoeff(), floor - 1e-12) << "vertex " << i;
+    plain_went_below |= (Y * plain_x.row(i).transpose()).minCoeff() < floor - 1e-6;
+  }
+  EXPECT_TRUE(plain_went_below);  // without the limit the bound is broken: the test has power
+  EXPECT_GE(x.col(0).minCoeff(), 0.0);
 }
 
 }  // namespace

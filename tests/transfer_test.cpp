@@ -118,6 +118,48 @@ TEST(Transfer, EstimatorIsUnbiasedAgainstHighRayReference) {
   EXPECT_GE(informative, 8);  // the configuration really is noisy, so the test has power
 }
 
+// The estimator's own variance estimate (from its two halves) against the spread of independent
+// estimates: over M seeds, the mean reported variance and the measured variance (summed over
+// the K coefficients) agree within their sampling error. The measured variance of M draws has a
+// relative standard error of about sqrt(2 / (M − 1)) per coefficient (fewer over K of them), the
+// mean report its own; 4 combined standard errors bound the ratio.
+TEST(Transfer, VarianceEstimateMatchesTheSpreadOfIndependentEstimates) {
+  HalfOccluded h;
+  const int order = 4, K = sh_count(order), M = 600;
+  for (int rays : {16, 64}) {
+    TransferOptions o;
+    o.order = order, o.rays = rays;
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(K), sum2 = Eigen::VectorXd::Zero(K);
+    double reported = 0, reported2 = 0;
+    for (int s = 0; s < M; ++s) {
+      o.seed = static_cast<uint64_t>(s);
+      std::vector<double> v;
+      const Eigen::VectorXd t = shadowed_transfer(h.scene, h.p, h.n, o, nullptr, {}, nullptr, &v).row(0).transpose();
+      sum += t, sum2 += t.cwiseProduct(t);
+      reported += v[0], reported2 += v[0] * v[0];
+    }
+    const Eigen::VectorXd mean = sum / M;
+    const double measured = ((sum2 / M - mean.cwiseProduct(mean)) * (double(M) / (M - 1))).sum();
+    const double mean_reported = reported / M;
+    const double sd_reported = std::sqrt(std::max(0.0, reported2 / M - mean_reported * mean_reported));
+    const double rel_se = std::sqrt(2.0 / (M - 1) + std::pow(sd_reported / mean_reported, 2) / M);
+    std::printf("rays %d: measured variance %.6g, mean reported %.6g (ratio %.3f, relative SE %.3f)\n", rays, measured, mean_reported,
+                mean_reported / measured, rel_se);
+    EXPECT_LT(std::abs(std::log(mean_reported / measured)), 4 * rel_se) << rays << " rays";
+  }
+  // An unoccluded point is exact, and says so; a single ray cannot say anything.
+  const Mesh sphere = test::build(test::icosphere(2));
+  const RayScene scene(sphere.positions, position_triangles(sphere));
+  TransferOptions o;
+  o.rays = 64;
+  std::vector<double> v;
+  shadowed_transfer(scene, vertex_positions(sphere), sphere.normals, o, nullptr, {}, nullptr, &v);
+  EXPECT_EQ(*std::max_element(v.begin(), v.end()), 0.0);
+  o.rays = 1;
+  shadowed_transfer(scene, vertex_positions(sphere), sphere.normals, o, nullptr, {}, nullptr, &v);
+  EXPECT_TRUE(std::isinf(v[0]));
+}
+
 TEST(Transfer, SameResultTranslatedByAMillionAndScaledDownTenThousandfold) {
   // A sphere resting on a plane: contact shadows near the ground, open sky above. The scene is
   // traced in coordinates relative to its bounding box, and the ray offset scales with it, so
@@ -169,12 +211,12 @@ TEST(Transfer, GroupsAreTheSameTraceAndTheirMomentsDoNotDependOnThreads) {
   // Uneven groups, consumed in any order: each row as the whole trace has it, every row once.
   std::vector<size_t> begin{0, 1, 7, 100, s.size()};
   RowMatrixXd grouped = RowMatrixXd::Constant(whole.rows(), whole.cols(), NAN);
-  shadowed_transfer_groups(scene, s.points, s.normals, begin, o, [&](size_t g, const double* v, size_t rows) {
+  shadowed_transfer_groups(scene, s.points, s.normals, begin, o, [&](size_t g, const double* v, const double*, size_t rows) {
     ASSERT_EQ(rows, begin[g + 1] - begin[g]);
     std::copy_n(v, rows * size_t(whole.cols()), grouped.row(Eigen::Index(begin[g])).data());
   }, nullptr, {}, &s.offsets);
   EXPECT_EQ(grouped, whole);
-  EXPECT_THROW(shadowed_transfer_groups(scene, s.points, s.normals, {0, 5, 3, s.size()}, o, [](size_t, const double*, size_t) {}),
+  EXPECT_THROW(shadowed_transfer_groups(scene, s.points, s.normals, {0, 5, 3, s.size()}, o, [](size_t, const double*, const double*, size_t) {}),
                InputError);
   // The face moments: identical for one and two threads, and the stored values' moments up to
   // the order of summation.
@@ -186,6 +228,22 @@ TEST(Transfer, GroupsAreTheSameTraceAndTheirMomentsDoNotDependOnThreads) {
   EXPECT_EQ(one.rows, two.rows);
   const FaceMoments stored = face_moments(m, s, whole);
   EXPECT_LT((one.rows - stored.rows).cwiseAbs().maxCoeff(), 1e-12 * stored.rows.cwiseAbs().maxCoeff());
+  // Their variances: Σ_k (w_k h_c)² var_k over each face's samples, from the very rays traced
+  // (shadowed_transfer's per-point variances), also across a face's several chunks; the same for
+  // both thread counts.
+  std::vector<double> var;
+  shadowed_transfer(scene, s.points, s.normals, o, nullptr, {}, &s.offsets, &var);
+  std::vector<double> expected(3 * m.num_faces(), 0.0);
+  for (size_t k = 0; k < s.size(); ++k)
+    for (int c = 0; c < 3; ++c) expected[3 * s.face[k] + size_t(c)] += std::pow(s.weight[k] * s.barycentric(Eigen::Index(k), c), 2) * var[k];
+  ASSERT_EQ(one.variance.size(), expected.size());
+  EXPECT_EQ(one.variance, two.variance);
+  double largest = 0;
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_NEAR(one.variance[i], expected[i], 1e-12 * std::max(expected[i], 1e-30)) << i;
+    largest = std::max(largest, expected[i]);
+  }
+  EXPECT_GT(largest, 0.0);  // some samples are partly occluded: the check has something to check
 }
 
 TEST(Transfer, RejectsBadOptions) {
