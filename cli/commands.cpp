@@ -137,7 +137,12 @@ int cmd_inspect(int argc, char** argv) {
   if (meta.count("sh_order") && meta.at("sh_order") != std::to_string(a.order))
     std::printf("  warning:    sh_order comment says %s\n", meta.at("sh_order").c_str());
   if (!report.empty()) r.write(report);
-  return r.number("normals_not_unit") > 0 ? 1 : 0;
+  if (r.number("normals_not_unit") > 0) {
+    // A failed check is a failure like any other: its one line on stderr, whatever stdout shows.
+    std::fprintf(stderr, "%s\n", r.format("prtsub: error: {input}: {normals_not_unit} of {vertices} normals are not unit length").c_str());
+    return 1;
+  }
+  return 0;
 }
 
 int cmd_diff(int argc, char** argv) {

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "cli/args.h"
+#include "cli/escape.h"
 #include "cli/options.h"
 #include "cli/specs.h"
 #include "cli/report.h"
@@ -115,8 +116,8 @@ std::string svg_plot(const std::map<std::string, std::vector<std::pair<double, d
       o << "<line x1='" << L << "' x2='" << W - R << "' y1='" << py(y) << "' y2='" << py(y) << "' stroke='#eee'/>";
       o << "<text x='" << L - 4 << "' y='" << py(y) + 4 << "' text-anchor='end'>" << fmt(y, 3) << "</text>";
     }
-  o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << xlabel << "</text>";
-  o << "<text transform='rotate(-90)' x='" << -(T + H - B) / 2 << "' y='16' text-anchor='middle'>" << ylabel << "</text>";
+  o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << html_escape(xlabel) << "</text>";
+  o << "<text transform='rotate(-90)' x='" << -(T + H - B) / 2 << "' y='16' text-anchor='middle'>" << html_escape(ylabel) << "</text>";
   int c = 0;
   for (const auto& [name, pts] : series) {
     const char* col = colours[c % 7];
@@ -129,7 +130,7 @@ std::string svg_plot(const std::map<std::string, std::vector<std::pair<double, d
     for (auto [x, y] : sorted)
       if (x > 0 && y > 0) o << "<circle cx='" << px(x) << "' cy='" << py(y) << "' r='3' fill='" << col << "'/>";
     o << "<line x1='" << W - R + 10 << "' x2='" << W - R + 30 << "' y1='" << T + 12 + 16 * c << "' y2='" << T + 12 + 16 * c
-      << "' stroke='" << col << "' stroke-width='2'/><text x='" << W - R + 34 << "' y='" << T + 16 + 16 * c << "'>" << name
+      << "' stroke='" << col << "' stroke-width='2'/><text x='" << W - R + 34 << "' y='" << T + 16 + 16 * c << "'>" << html_escape(name)
       << "</text>";
     ++c;
   }
@@ -217,7 +218,7 @@ void write_tables(const std::string& dir, const std::string& input, const BakeOp
                   const std::vector<Row>& rows) {
   std::ostringstream csv, json;
   csv << "method,estimate,fit,triangles,vertices,rms_percent,p95_percent,seconds\n";
-  json << "{\n  \"input\": \"" << input << "\",\n  \"order\": " << base.transfer.order << ",\n  \"rays\": " << base.transfer.rays
+  json << "{\n  \"input\": " << json_quote(input) << ",\n  \"order\": " << base.transfer.order << ",\n  \"rays\": " << base.transfer.rays
        << ",\n  \"reference_points\": " << ref.points.rows() << ",\n  \"reference_rays\": " << ref.rays
        << ",\n  \"noise_floor_percent\": " << fmt(100 * ref.noise_floor, 6) << ",\n  \"runs\": [\n";
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -281,11 +282,11 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
   }
   const std::string& input = c.bake.input;
   std::ostringstream html;
-  html << "<!doctype html><html><head><meta charset='utf-8'><title>prtsub compare: " << input << "</title>"
+  html << "<!doctype html><html><head><meta charset='utf-8'><title>prtsub compare: " << html_escape(input) << "</title>"
        << "<style>body{font-family:sans-serif;margin:24px;color:#222}table{border-collapse:collapse}td,th{padding:3px 10px;"
           "border-bottom:1px solid #ddd;text-align:right}th{background:#f4f4f4}td:first-child,td:nth-child(2){text-align:left}"
           "figure{display:inline-block;margin:6px}figcaption{font-size:12px;max-width:480px}</style></head><body>";
-  html << "<h1>Uniform against adaptive refinement</h1><p>Input <code>" << input << "</code>, " << source_faces
+  html << "<h1>Uniform against adaptive refinement</h1><p>Input <code>" << html_escape(input) << "</code>, " << source_faces
        << " triangles. Order " << base.transfer.order << ", " << base.transfer.rays << " rays per vertex, seed " << base.transfer.seed
        << ". Error: surface RMS of ‖g − t<sub>ref</sub>‖ / ‖t<sub>unshadowed</sub>‖ at " << ref.points.rows()
        << " seeded area-stratified points, reference " << ref.rays << " rays (its own noise floor " << fmt(100 * ref.noise_floor, 3)
@@ -303,11 +304,11 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
          << r.vertices << "</td><td>" << fmt(r.rms) << "</td><td>" << fmt(r.p95) << "</td><td>" << fmt(r.seconds, 3) << "</td></tr>";
   html << "</table>";
   if (!images.empty()) {
-    html << "<h2>Relit frames</h2><p>Frames at " << frame_count << " triangles under " << c.lights[0]
-         << (c.lights.size() > 1 ? " + " + c.lights[1] : "") << "; the reference computes transfer at every pixel ("
+    html << "<h2>Relit frames</h2><p>Frames at " << frame_count << " triangles under " << html_escape(c.lights[0])
+         << (c.lights.size() > 1 ? " + " + html_escape(c.lights[1]) : "") << "; the reference computes transfer at every pixel ("
          << c.frame_rays << " rays). Heat maps: black none, yellow 4x the frame's RMSE or more.</p>";
     for (const auto& [caption, png] : images)
-      html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << caption << "</figcaption></figure>";
+      html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << html_escape(caption) << "</figcaption></figure>";
   }
   html << "<p style='font-size:12px;color:#666'>Made by <code>prtsub compare</code>; results.csv and results.json hold the same table.</p></body></html>\n";
   write_file_atomically(c.out_dir + "/report.html", html.str());

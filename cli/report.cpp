@@ -1,5 +1,7 @@
 #include "cli/report.h"
 
+#include "cli/escape.h"
+
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -11,31 +13,6 @@
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
-namespace {
-
-std::string quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
-
-}  // namespace
-
 void Report::put(Entry e) {
   for (Entry& old : entries_)
     if (old.key == e.key) {
@@ -58,7 +35,7 @@ void Report::set(const std::string& key, double v) {
 }
 void Report::set(const std::string& key, int64_t v) { put({key, std::to_string(v), static_cast<double>(v), true, true, ""}); }
 void Report::set(const std::string& key, uint64_t v) { put({key, std::to_string(v), static_cast<double>(v), true, true, ""}); }
-void Report::set(const std::string& key, const std::string& v) { put({key, quote(v), 0, false, false, v}); }
+void Report::set(const std::string& key, const std::string& v) { put({key, json_quote(v), 0, false, false, v}); }
 void Report::set(const std::string& key, bool v) { put({key, v ? "true" : "false", 0, false, false, v ? "yes" : "no"}); }
 
 bool Report::has(const std::string& key) const { return find(key) != nullptr; }
@@ -71,7 +48,7 @@ double Report::number(const std::string& key) const {
 std::string Report::json() const {
   std::string out = "{\n";
   for (size_t i = 0; i < entries_.size(); ++i)
-    out += "  " + quote(entries_[i].key) + ": " + entries_[i].json + (i + 1 < entries_.size() ? ",\n" : "\n");
+    out += "  " + json_quote(entries_[i].key) + ": " + entries_[i].json + (i + 1 < entries_.size() ? ",\n" : "\n");
   return out + "}\n";
 }
 

@@ -150,6 +150,8 @@ Asset read_asset(const std::string& path) {
   const PlyElement* v = ply.element("vertex");
   const PlyElement* f = ply.element("face");
   if (!v || !f) throw InputError(path + ": not a prtsub asset (needs vertex and face elements)");
+  if (v->count == 0 || f->count == 0)
+    throw InputError(path + ": empty asset (" + std::to_string(v->count) + " vertices, " + std::to_string(f->count) + " faces)");
   Asset a;
   for (const std::string& c : ply.comments) {
     size_t sp = c.find(' ');
@@ -211,15 +213,16 @@ Asset read_asset(const std::string& path) {
   a.source_face.resize(f->count);
   for (size_t i = 0; i < f->count; ++i) {
     if (offs[i + 1] - offs[i] != 3) throw InputError(path + ": face " + std::to_string(i) + " is not a triangle");
+    const std::string face = path + ": face " + std::to_string(i);
     for (int k = 0; k < 3; ++k) {
-      double idx = vals[offs[i] + static_cast<size_t>(k)];
-      if (!(idx >= 0 && idx < static_cast<double>(V)))
-        throw InputError(path + ": face " + std::to_string(i) + " refers to vertex " + std::to_string(static_cast<long long>(idx)) +
-                         " of " + std::to_string(V));
+      const int64_t idx = index_value(vals[offs[i] + static_cast<size_t>(k)], face + "'s vertex index");
+      if (idx < 0 || idx >= static_cast<int64_t>(V))
+        throw InputError(face + " refers to vertex " + std::to_string(idx) + " of " + std::to_string(V));
       a.triangles[i][static_cast<size_t>(k)] = static_cast<uint32_t>(idx);
     }
-    if (!((*src)[i] >= 0)) throw InputError(path + ": face " + std::to_string(i) + " has a negative source_face");
-    a.source_face[i] = static_cast<uint32_t>((*src)[i]);
+    const int64_t source = index_value((*src)[i], face + "'s source_face");
+    if (source < 0 || source > int64_t(UINT32_MAX)) throw InputError(face + " has source_face " + std::to_string(source) + ", out of range");
+    a.source_face[i] = static_cast<uint32_t>(source);
   }
   return a;
 }

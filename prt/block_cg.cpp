@@ -181,12 +181,17 @@ class Run {
 
 }  // namespace
 
-BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o) {
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o) {
   BlockCgResult result;
-  if (A.rows() == 0 || B.cols() == 0) {
+  if (A_in.rows() == 0 || B.cols() == 0) {
     result.converged = true;
     return result;
   }
+  // The passes read the compressed arrays (outer[i]..outer[i+1]); a matrix still being filled
+  // has reserved, unwritten slots between its rows, so take a compressed copy of it.
+  RowSparseMatrixd compressed;
+  if (!A_in.isCompressed()) compressed = A_in, compressed.makeCompressed();
+  const RowSparseMatrixd& A = A_in.isCompressed() ? A_in : compressed;
   Run run(A, B, X, o);
   bool any = run.start(), broke = false;
   while (any && result.iterations < o.max_iterations) {

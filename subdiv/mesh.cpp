@@ -1,6 +1,7 @@
 #include "prtsub/subdiv/mesh.h"
 
 #include "prtsub/subdiv/adjacency.h"
+#include "prtsub/subdiv/exceptions.h"
 
 #include <algorithm>
 
@@ -13,6 +14,7 @@ RowMatrixX3d vertex_positions(const Mesh& mesh) {
 }
 
 Bounds bounds(const RowMatrixX3d& positions) {
+  if (positions.rows() == 0) throw InputError("bounds of an empty point set");
   Bounds b;
   b.lo = positions.colwise().minCoeff().transpose();
   b.hi = positions.colwise().maxCoeff().transpose();

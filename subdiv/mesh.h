@@ -73,7 +73,7 @@ struct Bounds {
   double diagonal() const { return (hi - lo).norm(); }
 };
 
-//! \pre positions has at least one row.
+//! \throw InputError when positions has no rows
 Bounds bounds(const RowMatrixX3d& positions);
 
 //! Area of triangle (a, b, c).

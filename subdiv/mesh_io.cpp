@@ -325,7 +325,8 @@ RawMesh parse_ply_mesh(const std::string& bytes, const std::string& path) {
     const auto& offs = f->list_offsets[static_cast<size_t>(li)];
     const auto& vals = f->list_values[static_cast<size_t>(li)];
     raw.face_indices.reserve(vals.size());
-    for (double d : vals) raw.face_indices.push_back(static_cast<int64_t>(d));
+    for (size_t k = 0; k < vals.size(); ++k)
+      raw.face_indices.push_back(index_value(vals[k], path + ": a vertex index of a face (list value " + std::to_string(k) + ")"));
     raw.face_offsets.assign(offs.begin(), offs.end());
   }
   return raw;

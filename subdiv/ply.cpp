@@ -154,6 +154,15 @@ std::string read_file_bytes(const std::string& path) {
   return ss.str();
 }
 
+int64_t index_value(double v, const std::string& what) {
+  if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 9007199254740992.0) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    throw InputError(what + " is not an integer index (" + buf + ")");
+  }
+  return static_cast<int64_t>(v);
+}
+
 PlyFile read_ply(const std::string& path) { return parse_ply(read_file_bytes(path), path); }
 
 namespace {
@@ -187,6 +196,8 @@ size_t parse_header(const std::string& bytes, const std::string& path, PlyFile& 
       long long count = -1;
       ls >> e.name >> count;
       if (!ls || count < 0) throw InputError(path + ": bad element line " + std::to_string(line_no) + " in PLY header");
+      for (const ElementDecl& d : decls)
+        if (d.name == e.name) throw InputError(path + ": PLY header declares element '" + e.name + "' twice (line " + std::to_string(line_no) + ")");
       e.count = static_cast<size_t>(count);
       decls.push_back(e);
     } else if (kw == "property") {
@@ -257,7 +268,10 @@ PlyFile parse_ply(const std::string& bytes, const std::string& path) {
     std::vector<int> slot;
     PlyElement e = empty_element(d, slot);
     const std::string where = "element '" + d.name + "'";
-    for (size_t row = 0; row < d.count; ++row) {
+    // Rows without properties hold no bytes: there is nothing to read, however many the header
+    // claims (counting them up to 10^18 would take hours).
+    const size_t rows = d.properties.empty() ? 0 : d.count;
+    for (size_t row = 0; row < rows; ++row) {
       for (size_t k = 0; k < d.properties.size(); ++k) {
         const PropertyDecl& p = d.properties[k];
         if (!p.is_list) {

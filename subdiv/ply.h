@@ -2,6 +2,8 @@
 // for reading assets back. Every malformation becomes an InputError naming the file.
 #pragma once
 
+#include <cstdint>
+
 #include <string>
 #include <vector>
 
@@ -36,6 +38,10 @@ struct PlyFile {
 PlyFile read_ply(const std::string& path);
 
 //! Parses PLY bytes; `path` only names the source in messages.
+//! An index stored as a number (PLY lists may be float): finite, integral and within ±2⁵³, or an
+//! InputError naming `what`. Range checks are the caller's.
+int64_t index_value(double v, const std::string& what);
+
 PlyFile parse_ply(const std::string& bytes, const std::string& path);
 
 //! Reads a file into memory. \throw IoError naming the path.

@@ -112,5 +112,31 @@ TEST(Asset, ReaderRejectsCorruptAssets) {
   EXPECT_THROW(read_asset(dir.path("mesh.ply")), InputError);
 }
 
+TEST(Asset, EmptyAssetsAndNonIntegralIndicesAreOneLineErrors) {
+  test::TempDir dir;
+  const std::string header = "ply\nformat ascii 1.0\ncomment prtsub_asset 1\nelement vertex %d\nproperty float x\nproperty float y\n"
+                             "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float t0\n"
+                             "element face %d\nproperty list uchar int vertex_indices\nproperty float source_face\nend_header\n";
+  auto asset = [&](int v, int f, const std::string& body) {
+    char h[1024];
+    std::snprintf(h, sizeof h, header.c_str(), v, f);
+    test::write_text(dir.path("a.ply"), h + body);
+    try {
+      read_asset(dir.path("a.ply"));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(asset(0, 0, "").find("empty asset (0 vertices, 0 faces)"), std::string::npos);
+  const std::string three = "0 0 0 0 0 1 1\n1 0 0 0 0 1 1\n0 1 0 0 0 1 1\n";
+  EXPECT_NE(asset(3, 0, three).find("empty asset"), std::string::npos);
+  EXPECT_EQ(asset(3, 1, three + "3 0 1 2 0\n"), "(accepted)");
+  EXPECT_NE(asset(3, 1, three + "3 0 1 2 2.5\n").find("source_face is not an integer index"), std::string::npos);
+  EXPECT_NE(asset(3, 1, three + "3 0 1 2 nan\n").find("source_face is not an integer index"), std::string::npos);
+  EXPECT_NE(asset(3, 1, three + "3 0 1 2 1e300\n").find("source_face is not an integer index"), std::string::npos);
+  EXPECT_NE(asset(3, 1, three + "3 0 1 2 -1\n").find("out of range"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace prtsub

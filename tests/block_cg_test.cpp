@@ -99,5 +99,27 @@ TEST(BlockCg, IndefiniteOrStalledSystemsSayTheyDidNotConverge) {
   EXPECT_TRUE(Y.allFinite());
 }
 
+// A matrix still being filled (uncompressed) has reserved slots between its rows whose contents
+// are whatever the allocator left. The solve must read only the written entries: fill the gaps
+// with junk and get exactly the compressed matrix's answer.
+TEST(BlockCg, DoesNotDependOnTheCallersStorageState) {
+  const RowSparseMatrixd C = chain(300, 9);
+  RowSparseMatrixd U(C.rows(), C.cols());
+  U.reserve(Eigen::VectorXi::Constant(C.rows(), 8));  // room for 8 per row, far more than used
+  for (Eigen::Index i = 0; i < C.rows(); ++i)
+    for (RowSparseMatrixd::InnerIterator it(C, i); it; ++it) U.insert(i, it.col()) = it.value();
+  ASSERT_FALSE(U.isCompressed());
+  for (Eigen::Index i = 0; i < U.rows(); ++i)
+    for (auto k = U.outerIndexPtr()[i] + U.innerNonZeroPtr()[i]; k < U.outerIndexPtr()[i + 1]; ++k)
+      U.valuePtr()[k] = 1e6, U.innerIndexPtr()[k] = 0;  // junk in the gaps
+  const RowMatrixXd B = random_columns(300, 3, 10);
+  RowMatrixXd x_compressed = RowMatrixXd::Zero(300, 3), x_filling = RowMatrixXd::Zero(300, 3);
+  const BlockCgResult a = block_conjugate_gradient(C, B, x_compressed);
+  const BlockCgResult b = block_conjugate_gradient(U, B, x_filling);
+  EXPECT_TRUE(a.converged);
+  EXPECT_TRUE(b.converged);
+  EXPECT_EQ(x_compressed, x_filling);
+}
+
 }  // namespace
 }  // namespace prtsub

@@ -9,6 +9,7 @@
 #include "cli_helpers.h"
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/mesh_io.h"
 #include "prtsub/subdiv/ply.h"
 
 namespace prtsub {
@@ -314,6 +315,57 @@ TEST_F(Cli, EveryUsageMistakeExitsTwoWithOneLineNamingTheOption) {
     EXPECT_NE(err.find(option), std::string::npos) << option << " not named in: " << err;
   }
   EXPECT_EQ(files(), before);
+}
+
+// Every command refuses an empty asset with one line (render used to stop on an assertion).
+TEST_F(Cli, EmptyAssetsAreOneLineErrorsForEveryCommand) {
+  const std::string empty = dir.path("empty.ply");
+  test::write_text(empty, "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+                          "property float nx\nproperty float ny\nproperty float nz\nproperty float t0\nelement face 0\n"
+                          "property list uchar int vertex_indices\nproperty int source_face\nend_header\n");
+  const std::string in = scene();
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"render", empty, "--light", "sky", "-o", dir.path("f.exr")}, {"inspect", empty},
+        {"eval", empty, "--source", in}}) {
+    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(run(args), 1) << args[0];
+    testing::internal::GetCapturedStdout();
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(err, "prtsub: error: " + empty + ": empty asset (0 vertices, 0 faces)\n") << args[0];
+  }
+  EXPECT_FALSE(test::file_exists(dir.path("f.exr")));
+}
+
+// A failed check says why on stderr, not only on stdout.
+TEST_F(Cli, InspectSaysOnStderrWhyItFails) {
+  Mesh m = test::build(test::cube());
+  m.normals *= 2;  // not unit length
+  const std::string asset = dir.path("long.ply");
+  write_asset(asset, m, RowMatrixXd::Ones(Eigen::Index(m.num_vertices()), 4), {});
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"inspect", asset}), 1);
+  testing::internal::GetCapturedStdout();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(err, "prtsub: error: " + asset + ": " + std::to_string(m.num_vertices()) + " of " + std::to_string(m.num_vertices()) +
+                     " normals are not unit length\n");
+}
+
+// What compare's page and tables take from a path is escaped for where it goes.
+TEST_F(Cli, CompareEscapesTheInputsNameInItsPageAndTables) {
+  const std::string in = dir.path("a<img src=x onerror=alert(1)>\"q'.obj");
+  test::write_obj(in, test::merge(test::icosphere(0), test::quad(2.0, -1.0, true)));
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"compare", in, "--budgets", "200", "--max-levels", "1", "--rays", "4", "--eval-points", "200", "--estimates", "root",
+                 "--frame-size", "32,24", "--frame-rays", "4", "--light", "sky:0,1,0", "-o", dir.path("c")}),
+            0);
+  testing::internal::GetCapturedStdout();
+  const std::string html = read_file_bytes(dir.path("c/report.html")), json = read_file_bytes(dir.path("c/results.json"));
+  EXPECT_EQ(html.find("<img src=x"), std::string::npos);
+  EXPECT_NE(html.find("a&lt;img src=x onerror=alert(1)&gt;&quot;q&#39;.obj"), std::string::npos);
+  EXPECT_EQ(json.find("<img"), std::string::npos);
+  EXPECT_NE(json.find("a\\u003cimg src=x onerror=alert(1)\\u003e\\\"q'.obj"), std::string::npos) << json.substr(0, 200);
 }
 
 }  // namespace

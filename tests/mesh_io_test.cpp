@@ -8,6 +8,7 @@
 #include "helpers.h"
 #include "prtsub/subdiv/random.h"
 #include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/ply.h"
 
 namespace prtsub {
 namespace {
@@ -237,6 +238,46 @@ TEST_F(MeshIo, RandomBytesNeverCrash) {
     } catch (const InputError&) {
     }
   }
+}
+
+// A header may claim any count: an element without properties holds no bytes, so reading it
+// must not count to 10^18 (it did: a 60-byte file kept the reader busy for hours). Declaring an
+// element twice is an error, not a second, empty element to spin over.
+TEST(MeshIoHardening, ClaimedCountsCannotMakeTheReaderSpin) {
+  const std::string empty_rows = "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000000000\nend_header\n";
+  try {
+    parse_ply_mesh(empty_rows, "spin.ply");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("spin.ply: PLY vertex element lacks x, y or z"), std::string::npos) << e.what();
+  }
+  const std::string twice = binary_ply(false) ;
+  std::string dup = twice;
+  dup.insert(dup.find("end_header"), "element face 2147483648\n");
+  try {
+    parse_ply_mesh(dup, "dup.ply");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares element 'face' twice"), std::string::npos) << e.what();
+  }
+}
+
+// Indices stored as numbers must be integers: 2.5 is not vertex 2, and NaN or 1e300 must not
+// reach an integer conversion (undefined behaviour).
+TEST(MeshIoHardening, FractionalAndNonFiniteIndicesAreErrors) {
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 1\nproperty list uchar float vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  for (const char* face : {"3 0 1 2.5\n", "3 0 1 nan\n", "3 0 1 1e300\n", "3 0 1 -inf\n"}) {
+    try {
+      parse_ply_mesh(head + face, "idx.ply");
+      ADD_FAILURE() << face;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("is not an integer index"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(parse_ply_mesh(head + "3 0 1 2\n", "ok.ply").face_indices, (std::vector<int64_t>{0, 1, 2}));  // 2.0 is fine
+  EXPECT_THROW(index_value(4.5, "x"), InputError);
+  EXPECT_EQ(index_value(-3, "x"), -3);
 }
 
 }  // namespace
