@@ -86,13 +86,7 @@ void Report::print(FILE* out, std::initializer_list<const char*> lines) const {
   }
 }
 
-void check_writable(const std::string& path) {
-  const std::string probe = path + ".tmp.probe." + std::to_string(::getpid());
-  FILE* f = std::fopen(probe.c_str(), "wb");
-  if (!f) throw IoError(path + ": cannot create output file (" + std::strerror(errno) + ")");
-  std::fclose(f);
-  std::remove(probe.c_str());
-}
+void check_writable(const std::string& path) { check_output_path(path); }
 
 double peak_memory_mib() {
   rusage usage{};

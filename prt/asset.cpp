@@ -1,5 +1,7 @@
 #include "prtsub/prt/asset.h"
 
+#include "prtsub/prt/output_file.h"
+
 #include <algorithm>
 
 #include <unistd.h>
@@ -65,25 +67,6 @@ Metadata ao_metadata() {
       {"signal", "ao"},
       {"ao", "ao=(1/pi)*integral(V*max(n.w,0)) in [0,1] (1 unoccluded) radiance=albedo*ambient*ao"},
   };
-}
-
-void write_file_atomically(const std::string& path, const std::string& bytes) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError(path + ": cannot create output file (" + std::strerror(errno) + ")");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw IoError(path + ": write failed (disk full?)");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    int err = errno;
-    std::remove(tmp.c_str());
-    throw IoError(path + ": cannot move output into place (" + std::strerror(err) + ")");
-  }
 }
 
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "prtsub/prt/output_file.h"
 #include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
@@ -55,7 +56,5 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
 //! \throw InputError naming the file and the first problem found
 Asset read_asset(const std::string& path);
 
-//! Writes bytes to path atomically (temporary file in the same directory, then rename).
-void write_file_atomically(const std::string& path, const std::string& bytes);
 
 }  // namespace prtsub

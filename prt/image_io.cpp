@@ -3,8 +3,11 @@
 // otherwise quantise float data linearly while tagging the file sRGB (STACK.md).
 #include "prtsub/prt/image_io.h"
 
+#include "prtsub/prt/output_file.h"
+
 #include <unistd.h>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -56,14 +59,18 @@ Image read_image(const std::string& path) {
 void write_image(const std::string& path, const Image& img, const ImageWriteOptions& options) {
   const std::string ext = extension(path);
   if (ext != "exr" && ext != "png") throw InputError(path + ": unknown image format (use .exr or .png)");
-  // Temporary name keeps the extension so OIIO picks the right writer.
-  const std::string tmp = path.substr(0, path.size() - ext.size() - 1) + ".tmp" + std::to_string(::getpid()) + "." + ext;
-  auto out = OIIO::ImageOutput::create(tmp);
-  if (!out) throw IoError(path + ": no image writer (" + OIIO::geterror() + ")");
+  // Encoded into memory through OIIO's I/O proxy, then written like every other output
+  // (write_file_atomically: a temporary file renamed into place, devices in place, every error
+  // checked), so an image follows the same rules as an asset or a report.
+  std::vector<unsigned char> encoded;
+  OIIO::Filesystem::IOVecOutput proxy(encoded);
+  auto out = OIIO::ImageOutput::create("image." + ext);
+  if (!out || !out->supports("ioproxy")) throw IoError(path + ": no in-memory image writer (" + OIIO::geterror() + ")");
+  out->set_ioproxy(&proxy);
   bool ok;
   if (ext == "exr") {
     OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::FLOAT);
-    ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data());
+    ok = out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data());
   } else {
     OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
@@ -73,18 +80,12 @@ void write_image(const std::string& path, const Image& img, const ImageWriteOpti
       double v = alpha ? std::clamp<double>(img.pixels[i], 0, 1) : linear_to_srgb(options.exposure * img.pixels[i]);
       bytes[i] = static_cast<unsigned char>(std::lround(255 * (std::isfinite(v) ? v : 0.0)));
     }
-    ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    ok = out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
   }
-  std::string err = ok ? "" : out->geterror();
+  const std::string err = ok ? "" : out->geterror();
   ok = out->close() && ok;
-  if (!ok) {
-    std::remove(tmp.c_str());
-    throw IoError(path + ": cannot write image (" + (err.empty() ? out->geterror() : err) + ")");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError(path + ": cannot move image into place");
-  }
+  if (!ok) throw IoError(path + ": cannot encode image (" + (err.empty() ? out->geterror() : err) + ")");
+  write_file_atomically(path, std::string(encoded.begin(), encoded.end()));
 }
 
 }  // namespace prtsub

@@ -1,0 +1,150 @@
+// Atomic outputs. A temporary file beside the target (same directory, so the rename is atomic)
+// receives the bytes through write(2), is synced and closed, every step checked, and is then
+// renamed over the target. While it exists its name sits in a fixed table of slots, which
+// remove_temporary_files() walks with only async-signal-safe calls (unlink), so that a signal
+// handler can clean up: the table is written before the file is created and cleared after the
+// rename. Character devices are written in place (there is nothing to rename over: /dev/null
+// must keep working, and /dev/full must say it is full); every other non-regular target is
+// refused, because renaming over it would replace it (as root, a device node) with a file.
+#include "prtsub/prt/output_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+
+#include "prtsub/subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+constexpr int kSlots = 64;
+constexpr size_t kPathMax = 4096;
+struct Slot {
+  std::atomic<bool> used{false};
+  char path[kPathMax];
+};
+Slot g_slots[kSlots];
+std::atomic<unsigned> g_counter{0};
+
+int claim_slot(const std::string& tmp) {
+  if (tmp.size() >= kPathMax) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    bool expected = false;
+    if (g_slots[i].used.load() || !g_slots[i].used.compare_exchange_strong(expected, true)) continue;
+    std::memcpy(g_slots[i].path, tmp.c_str(), tmp.size() + 1);
+    return i;
+  }
+  return -1;  // more than kSlots writes at once: this one is not cleaned up by a signal
+}
+
+void release_slot(int slot) {
+  if (slot >= 0) g_slots[slot].used.store(false);
+}
+
+std::string errno_text() { return std::strerror(errno); }
+
+// Every byte through write(2), retried on EINTR and short writes.
+bool write_all(int fd, const std::string& bytes) {
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<size_t>(n);
+  }
+  return true;
+}
+
+std::string directory_of(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+}
+
+std::string temporary_name(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  return dir + "." + name + ".prtsub-tmp." + std::to_string(::getpid()) + "." + std::to_string(g_counter++);
+}
+
+// What kind of target this is: 0 none yet, 1 regular file, 2 character device; IoError otherwise.
+int target_kind(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) return 0;
+    throw IoError(path + ": cannot examine output path (" + errno_text() + ")");
+  }
+  if (S_ISREG(st.st_mode)) return 1;
+  if (S_ISCHR(st.st_mode)) return 2;
+  const char* what = S_ISDIR(st.st_mode) ? "a directory" : S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket"
+                     : S_ISBLK(st.st_mode) ? "a block device" : "not a regular file";
+  throw IoError(path + ": refusing to write output over " + std::string(what));
+}
+
+void write_in_place(const std::string& path, const std::string& bytes) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) throw IoError(path + ": cannot open output device (" + errno_text() + ")");
+  const bool written = write_all(fd, bytes);
+  const std::string reason = written ? "" : errno_text();
+  if (::close(fd) != 0 && written) throw IoError(path + ": write failed on close (" + errno_text() + ")");
+  if (!written) throw IoError(path + ": write failed (" + reason + ")");
+}
+
+}  // namespace
+
+void remove_temporary_files() {
+  for (Slot& slot : g_slots)
+    if (slot.used.load()) ::unlink(slot.path);
+}
+
+void write_file_atomically(const std::string& path, const std::string& bytes) {
+  if (target_kind(path) == 2) return write_in_place(path, bytes);
+  const std::string tmp = temporary_name(path);
+  const int slot = claim_slot(tmp);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    const std::string reason = errno_text();
+    release_slot(slot);
+    throw IoError(path + ": cannot create output file (" + reason + ")");
+  }
+  auto fail = [&](const std::string& what) {
+    const std::string reason = errno_text();
+    ::unlink(tmp.c_str());
+    release_slot(slot);
+    throw IoError(path + ": " + what + " (" + reason + ")");
+  };
+  if (!write_all(fd, bytes)) {
+    ::close(fd);
+    fail("write failed");
+  }
+  if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
+    ::close(fd);
+    fail("write failed on sync");
+  }
+  if (::close(fd) != 0) fail("write failed on close");
+  if (::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot move output into place");
+  release_slot(slot);
+}
+
+void check_output_path(const std::string& path) {
+  const int kind = target_kind(path);
+  if (kind == 2) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) throw IoError(path + ": cannot open output device (" + errno_text() + ")");
+    ::close(fd);
+    return;
+  }
+  // A new file must be creatable beside the target, where the temporary one will go.
+  const std::string probe = temporary_name(path);
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) throw IoError(path + ": cannot create output file in " + directory_of(path) + " (" + errno_text() + ")");
+  ::close(fd);
+  ::unlink(probe.c_str());
+  if (kind == 1 && ::access(path.c_str(), F_OK) != 0) throw IoError(path + ": output file vanished");
+}
+
+}  // namespace prtsub
