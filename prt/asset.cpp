@@ -128,8 +128,10 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   write_file_atomically(path, out);
 }
 
-Asset read_asset(const std::string& path) {
-  PlyFile ply = read_ply(path);
+Asset read_asset(const std::string& path) { return parse_asset(read_file_bytes(path), path); }
+
+Asset parse_asset(const std::string& bytes, const std::string& path) {
+  PlyFile ply = parse_ply(bytes, path);
   const PlyElement* v = ply.element("vertex");
   const PlyElement* f = ply.element("face");
   if (!v || !f) throw InputError(path + ": not a prtsub asset (needs vertex and face elements)");

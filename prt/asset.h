@@ -56,5 +56,8 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
 //! \throw InputError naming the file and the first problem found
 Asset read_asset(const std::string& path);
 
+//! The same from the file's bytes (`path` only names it in messages).
+Asset parse_asset(const std::string& bytes, const std::string& path);
+
 
 }  // namespace prtsub
