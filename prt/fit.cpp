@@ -33,6 +33,18 @@
 // right-hand sides. If it fails or its pivot ratio falls below 1e-7 (α = 0 with the sampled
 // mass matrix, faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
 // λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed.
+//
+// After the solve, two steps that the paper does not have:
+//  - Weighing by noise. The point samples (the prior) and the fit are two estimates of each
+//    vertex's value: the prior is biased where a face hides what its corners miss, the fit is
+//    noisy where its samples carry few rays. Given the prior's variance (from the transfer
+//    estimator's two ray halves) and the moments' (Σ (w·h)² var per face corner), four seeded
+//    ±1 probe columns, scaled by the moments' standard deviation and solved in the same block,
+//    give each vertex's fit variance; each vertex then keeps the share of its correction that
+//    minimises the mix's expected squared error.
+//  - Non-negativity. A vertex's DC coefficient is clamped at 0 (Constant), and optionally its
+//    transfer function is bounded below at 128 directions (Directions), so a non-negative light
+//    cannot show negative radiance where the point samples never would.
 #include "prtsub/prt/fit.h"
 
 #include <Eigen/CholmodSupport>
