@@ -265,13 +265,15 @@ PlyFile parse_ply(const std::string& bytes, const std::string& path) {
                        " rows, the file is too short for them)");
     if (ascii && d.count > bytes.size())  // each row takes at least one byte
       throw InputError(path + ": truncated ASCII PLY (header declares " + std::to_string(d.count) + " " + d.name + " rows)");
+    // Rows without properties hold no bytes, so nothing bounds how many a header may claim: a
+    // reader would count to 10^18, and a consumer would size its arrays by the claim (the fuzzer
+    // found 2.7·10^10 vertex rows in a 200-byte asset). No writer makes such an element.
+    if (d.properties.empty() && d.count > 0)
+      throw InputError(path + ": PLY element '" + d.name + "' declares " + std::to_string(d.count) + " rows but no properties");
     std::vector<int> slot;
     PlyElement e = empty_element(d, slot);
     const std::string where = "element '" + d.name + "'";
-    // Rows without properties hold no bytes: there is nothing to read, however many the header
-    // claims (counting them up to 10^18 would take hours).
-    const size_t rows = d.properties.empty() ? 0 : d.count;
-    for (size_t row = 0; row < rows; ++row) {
+    for (size_t row = 0; row < d.count; ++row) {
       for (size_t k = 0; k < d.properties.size(); ++k) {
         const PropertyDecl& p = d.properties[k];
         if (!p.is_list) {

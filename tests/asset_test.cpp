@@ -138,5 +138,21 @@ TEST(Asset, EmptyAssetsAndNonIntegralIndicesAreOneLineErrors) {
   EXPECT_NE(asset(3, 1, three + "3 0 1 2 -1\n").find("out of range"), std::string::npos);
 }
 
+// Found by tests/fuzz (fuzz_asset, 2026-11-29): a vertex element claiming 26,666,666,665 rows
+// and no properties, so no bytes bounded the claim, and the asset's arrays were sized by it
+// (out of memory). Now an InputError before anything is allocated.
+TEST(Asset, FuzzFindingAClaimedCountWithoutPropertiesIsAnError) {
+  const std::string bytes = test::base64_decode(
+      "cGx5CmZvcm1hdCBiaW5hcnlfbGl0dGxlX2VuZGlhbiAyLjAKY29tbWVudCBjb21tZW50IHNoX29yZGVyIDAKZWxlbWVudCB2ZXJ0ZXggMjY2NjY2NjY2"
+      "NjVgAGkgMS5YCmVsZW1lbnQgZmFjZSAxZ2VfZmFjZQplbmRfaGVhZGVyCgAA0OUAAD9iPwMA");
+  ASSERT_EQ(bytes.substr(0, 4), "ply\n");
+  try {
+    parse_asset(bytes, "crash.ply");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 26666666665 rows but no properties"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace prtsub

@@ -147,6 +147,25 @@ void write_text(const std::string& path, const std::string& text) {
   out << text;
 }
 
+std::string base64_decode(const std::string& text) {
+  auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    return c == '+' ? 62 : c == '/' ? 63 : -1;
+  };
+  std::string out;
+  uint32_t bits = 0;
+  int count = 0;
+  for (char c : text) {
+    const int v = value(c);
+    if (v < 0) continue;  // padding
+    bits = (bits << 6) | uint32_t(v);
+    if ((count += 6) >= 8) out += static_cast<char>((bits >> (count -= 8)) & 0xFF);
+  }
+  return out;
+}
+
 std::string shared_scenes() {
   std::string dir = PRTSUB_SHARED_SCENES;
   return std::filesystem::is_directory(dir) ? dir : "";

@@ -41,6 +41,8 @@ class TempDir {
 
 bool file_exists(const std::string& path);
 void write_text(const std::string& path, const std::string& text);
+//! Decodes standard base64 (fuzz findings are kept in the tests that way).
+std::string base64_decode(const std::string& text);
 //! Directory of ../shared/scenes, or "" when this clone has none.
 std::string shared_scenes();
 

@@ -249,7 +249,9 @@ TEST(MeshIoHardening, ClaimedCountsCannotMakeTheReaderSpin) {
     parse_ply_mesh(empty_rows, "spin.ply");
     ADD_FAILURE() << "accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("spin.ply: PLY vertex element lacks x, y or z"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("spin.ply: PLY element 'vertex' declares 1000000000000000000 rows but no properties"),
+              std::string::npos)
+        << e.what();
   }
   const std::string twice = binary_ply(false) ;
   std::string dup = twice;
