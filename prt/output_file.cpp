@@ -23,8 +23,10 @@ namespace {
 
 constexpr int kSlots = 64;
 constexpr size_t kPathMax = 4096;
+// A slot is free, claimed (its path being copied: the handler must not read it), or ready.
+enum SlotState : int { kFree = 0, kClaimed = 1, kReady = 2 };
 struct Slot {
-  std::atomic<bool> used{false};
+  std::atomic<int> state{kFree};
   char path[kPathMax];
 };
 Slot g_slots[kSlots];
@@ -33,16 +35,17 @@ std::atomic<unsigned> g_counter{0};
 int claim_slot(const std::string& tmp) {
   if (tmp.size() >= kPathMax) return -1;
   for (int i = 0; i < kSlots; ++i) {
-    bool expected = false;
-    if (g_slots[i].used.load() || !g_slots[i].used.compare_exchange_strong(expected, true)) continue;
+    int expected = kFree;
+    if (!g_slots[i].state.compare_exchange_strong(expected, kClaimed)) continue;
     std::memcpy(g_slots[i].path, tmp.c_str(), tmp.size() + 1);
+    g_slots[i].state.store(kReady);
     return i;
   }
   return -1;  // more than kSlots writes at once: this one is not cleaned up by a signal
 }
 
 void release_slot(int slot) {
-  if (slot >= 0) g_slots[slot].used.store(false);
+  if (slot >= 0) g_slots[slot].state.store(kFree);
 }
 
 std::string errno_text() { return std::strerror(errno); }
@@ -98,7 +101,7 @@ void write_in_place(const std::string& path, const std::string& bytes) {
 
 void remove_temporary_files() {
   for (Slot& slot : g_slots)
-    if (slot.used.load()) ::unlink(slot.path);
+    if (slot.state.load() == kReady) ::unlink(slot.path);
 }
 
 void write_file_atomically(const std::string& path, const std::string& bytes) {
