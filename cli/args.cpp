@@ -157,7 +157,9 @@ std::string ArgParser::help() const {
     std::string names = s.name;
     for (const auto& [sh, l] : aliases_)
       if (l == s.name) names = sh + ", " + names;
-    out << "  " << names << " " << s.metavar << "\n      " << s.help << "\n";
+    std::string help = s.help;  // continuation lines indented like the first
+    for (size_t at = help.find('\n'); at != std::string::npos; at = help.find('\n', at + 7)) help.insert(at + 1, "      ");
+    out << "  " << names << " " << s.metavar << "\n      " << help << "\n";
   }
   out << "  -h, --help\n      show this help\n";
   return out.str();
