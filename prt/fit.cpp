@@ -685,7 +685,8 @@ size_t keep_non_negative(const RowMatrixXd& prior, RowMatrixXd& x, NonNegative m
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments,
                               const RowMatrixXd& prior, const FitOptions& o, FitStats* stats_out,
                               const std::vector<double>* prior_variance) {
-  check_fit_inputs(mesh, s, moments, prior, o);
+  // The least-squares path checks its inputs in assemble_fit_system; the others here.
+  if (o.method != FitMethod::LeastSquares) check_fit_inputs(mesh, s, moments, prior, o);
   FitStats stats;
   stats.unknowns = mesh.num_vertices();
   RowMatrixXd x;
