@@ -10,6 +10,8 @@
 #include <fstream>
 #include <map>
 
+#include "prtsub/subdiv/random.h"
+
 namespace prtsub::test {
 
 namespace {
@@ -80,6 +82,31 @@ RawMesh quad(double half, double height, bool facing_up, double x0) {
     push_face(m, {0, 2, 1});
     push_face(m, {0, 3, 2});
   }
+  return m;
+}
+
+RawMesh grid(int n, double jitter, uint64_t seed) {
+  RawMesh m;
+  m.positions.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      double x = double(i) / n, y = double(j) / n;
+      if (jitter > 0 && i > 0 && i < n && j > 0 && j < n) {
+        Rng r(seed, uint64_t(j * (n + 1) + i));
+        x += jitter / n * (r.uniform() - 0.5), y += jitter / n * (r.uniform() - 0.5);
+      }
+      m.positions.row(j * (n + 1) + i) << x, y, 0;
+    }
+  m.face_offsets.push_back(0);
+  auto face = [&](int64_t a, int64_t b, int64_t c) {
+    m.face_indices.insert(m.face_indices.end(), {a, b, c});
+    m.face_offsets.push_back(m.face_indices.size());
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int64_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      face(a, b, c), face(a, c, d);
+    }
   return m;
 }
 
@@ -171,11 +198,6 @@ std::string shared_scenes() {
   return std::filesystem::is_directory(dir) ? dir : "";
 }
 
-}  // namespace prtsub::test
-
-#include "prtsub/subdiv/random.h"
-
-namespace prtsub::test {
 
 void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
   nodes.resize(static_cast<size_t>(n));

@@ -13,6 +13,10 @@ RawMesh icosphere(int levels);
 RawMesh cube();
 //! A square in the plane z = height spanning [-half, half]^2 (or [x0, half] in x), facing `up`.
 RawMesh quad(double half, double height, bool facing_up, double x0 = NAN);
+//! An n×n grid over [0,1]² at z = 0 facing +z, two triangles per cell (split along the diagonal
+//! from (i, j) to (i+1, j+1)); interior points moved by up to ±jitter/2 cells (seeded), so that
+//! areas differ as on real meshes.
+RawMesh grid(int n, double jitter = 0, uint64_t seed = 3);
 //! Concatenates meshes (no welding).
 RawMesh merge(const RawMesh& a, const RawMesh& b);
 //! Applies p -> scale * p + offset.

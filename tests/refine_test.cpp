@@ -42,24 +42,6 @@ EdgeCounts position_edges(const Mesh& m) {
   return count_edges(t);
 }
 
-// A flat grid of n×n unit squares in z = 0, each split along its diagonal: boundary, right angles.
-RawMesh grid(int n) {
-  RawMesh g;
-  g.positions.resize((n + 1) * (n + 1), 3);
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) g.positions.row(j * (n + 1) + i) << double(i) / n, double(j) / n, 0;
-  g.face_offsets.push_back(0);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      for (int v : {a, b, c}) g.face_indices.push_back(v);
-      g.face_offsets.push_back(g.face_indices.size());
-      for (int v : {a, c, d}) g.face_indices.push_back(v);
-      g.face_offsets.push_back(g.face_indices.size());
-    }
-  return g;
-}
-
 TEST(Refine, ClosedMeshStaysConformingWithExactBudgetAndArea) {
   Mesh m = test::build(test::icosphere(1));
   StepSignal s;
@@ -85,7 +67,7 @@ TEST(Refine, ClosedMeshStaysConformingWithExactBudgetAndArea) {
 }
 
 TEST(Refine, RefinesWhereTheSignalChanges) {
-  Mesh m = test::build(grid(8));
+  Mesh m = test::build(test::grid(8));
   StepSignal s;
   RowMatrixXd v = s.initial(m);
   refine_adaptive(m, v, s, RefineOptions{600, 8, 0});
@@ -97,7 +79,7 @@ TEST(Refine, RefinesWhereTheSignalChanges) {
 TEST(Refine, ABatchIsAtMostASixteenthOfTheFaces) {
   // 8 faces to 400: with batches of 256 the first would split on the 8 starting keys alone.
   // The cap grows the batch with the mesh: 1 face while under 32, then F/16.
-  Mesh m = test::build(grid(2));
+  Mesh m = test::build(test::grid(2));
   StepSignal s;
   RowMatrixXd v = s.initial(m);
   RefineStats st = refine_adaptive(m, v, s, RefineOptions{400, 256, 0});
@@ -127,7 +109,7 @@ TEST(Refine, BudgetParityAndTrivialBudgets) {
     EXPECT_EQ(m2.num_faces(), 82u);
   }
   for (size_t budget : {129u, 130u, 131u, 333u}) {  // with a boundary: exact, odd or even
-    Mesh m = test::build(grid(8));
+    Mesh m = test::build(test::grid(8));
     RowMatrixXd v = s.initial(m);
     RefineStats st = refine_adaptive(m, v, s, RefineOptions{budget, 4, 0});
     EXPECT_EQ(m.num_faces(), budget);
@@ -139,7 +121,7 @@ TEST(Refine, BudgetParityAndTrivialBudgets) {
 
 TEST(Refine, FacesWithoutErrorWaitForFacesWithError) {
   // Signal 1 at one interior grid vertex, 0 elsewhere: only its faces have error.
-  RawMesh g = grid(6);
+  RawMesh g = test::grid(6);
   Mesh m = test::build(g);
   struct Spike : RefinementSignal {
     Eigen::Vector3d at = Eigen::Vector3d(0.5, 0.5, 0);
@@ -278,7 +260,7 @@ TEST(Refine, SameInputSameOutput) {
 }
 
 TEST(Refine, MaxEdgePreRefinementBoundsEdgeLength) {
-  Mesh m = test::build(grid(2));
+  Mesh m = test::build(test::grid(2));
   StepSignal s;
   RowMatrixXd v = s.initial(m);
   RefineStats st = refine_adaptive(m, v, s, RefineOptions{100000, 64, 0.2});
