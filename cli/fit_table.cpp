@@ -46,7 +46,9 @@ std::vector<Column> fit_columns(const FitOptions& requested) {
 void print_table(const Report& r, const std::vector<Column>& columns, bool ao) {
   r.print(stdout, {"prtsub eval --fits: {input} ({triangles} triangles, {vertices} vertices), {signal_text}",
                    "  rays:       vertices {rays_per_vertex} each ({seconds_rays_vertices:2} s); {samples} surface samples, "
-                   "{sample_rays} rays each ({seconds_rays_samples:2} s)",
+                   "{sample_rays} rays each ({seconds_rays_samples:2} s, pilot included)",
+                   "  samples:    {sample_allocation} allocation; {sampled_faces} of {triangles} faces sampled; {pilot_samples} pilot "
+                   "samples ({seconds_pilot:2} s)",
                    "  reference:  {reference_points} points, {reference_rays} rays each ({seconds_reference:2} s); its own noise "
                    "floor {noise_floor_percent:3}%"});
   std::printf("  %-22s %9s %9s %10s %10s\n", "values", "RMS %", "p95 %", "solve s", "solve MiB");
@@ -89,7 +91,7 @@ int cmd_eval_fits(int argc, char** argv) {
   const BakeResult base = bake(load_mesh(cli.input, cli.load), point_only, progress.callbacks());
   const Mesh& mesh = base.mesh;
   const RayScene scene(mesh.positions, position_triangles(mesh));
-  const FitData data = sample_signal(mesh, scene, b, progress.callbacks());
+  const FitData data = sample_signal(mesh, scene, b, &base.transfer, &base.point_variance, progress.callbacks());
   progress.finish();
   std::vector<Column> columns = fit_columns(b.fit);
   size_t clamped = 0;
@@ -120,6 +122,10 @@ int cmd_eval_fits(int argc, char** argv) {
   r.set("rays_per_vertex", b.transfer.rays);
   r.set("samples", data.samples.size());
   r.set("sample_rays", b.sample_rays);
+  r.set("sample_allocation", sample_allocation_name(data.allocation));
+  r.set("pilot_samples", data.plan.pilot_samples);
+  r.set("sampled_faces", data.allocation == SampleAllocation::Pilot ? data.plan.sampled_faces : mesh.num_faces());
+  r.set("seconds_pilot", data.plan.seconds);
   r.set("alpha", b.fit.alpha);
   r.set("regularizer", regularizer_name(b.fit.regularizer));
   r.set("mass", mass_matrix_name(b.fit.mass));

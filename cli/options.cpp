@@ -56,6 +56,18 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &s.density, 0.0, 1e30);
   args.option("--min-samples", "M", "fit: samples every triangle gets at least", &s.min_per_triangle, size_t(0), size_t(1) << 20);
   args.option("--sample-rays", "R", "fit: rays per surface sample", &bake.sample_rays, 1, 1 << 20);
+  args.choice("--sample-allocation", "fit: which faces get samples: only those where a pilot pass finds that interpolating\n"
+              "the vertex values fails, or every face by area (the paper's)", &bake.allocation,
+              {SampleAllocation::Pilot, SampleAllocation::Area}, sample_allocation_name);
+  args.option("--pilot-samples", "N", "fit, pilot: pilot samples per triangle", &bake.pilot.per_triangle, 0.01, 1e3);
+  args.option("--pilot-vertex-share", "S", "fit, pilot: share of the sample rays the pilot saved that go to the noisiest\n"
+              "vertices instead", &bake.vertex_share, 0.0, 1e3);
+  args.option("--pilot-rays", "R", "fit, pilot: rays per pilot sample", &bake.pilot.rays, 2, 1 << 20);
+  args.option("--pilot-area-share", "A", "fit, pilot: share of a sampled face's density that follows its area alone (the rest\n"
+              "follows its estimated interpolation error)", &bake.pilot.area_share, 0.0, 1.0);
+  args.option("--pilot-rings", "N", "fit, pilot: each face pools the pilot samples within N vertex rings", &bake.pilot.rings, 1, 8);
+  args.option("--pilot-significance", "Z", "fit, pilot: standard errors a ring's excess residual must exceed to get samples",
+              &bake.pilot.significance, 0.0, 1e6);
 }
 
 void BakeCli::add_refinement(ArgParser& args) {

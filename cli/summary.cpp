@@ -34,11 +34,42 @@ void record(Report& r, const RefineStats& st) {
   r.set("refine_overhead_fraction", st.seconds_total > 0 ? (st.seconds_total - st.seconds_signal) / st.seconds_total : 0.0);
 }
 
+// How the samples were spread: faces by their sample count, in powers of two.
+void record_sample_spread(Report& r, const FitData& data) {
+  const SurfaceSamples& s = data.samples;
+  const size_t F = s.begin.empty() ? 0 : s.begin.size() - 1;
+  std::vector<size_t> bins(8, 0);  // 0, 1, 2-3, 4-7, ..., 64+
+  for (size_t f = 0; f < F; ++f) {
+    size_t n = s.begin[f + 1] - s.begin[f], b = 0;
+    while (n > 0 && b < 7) n >>= 1, ++b;
+    ++bins[b];
+  }
+  const char* names[8] = {"0", "1", "2_3", "4_7", "8_15", "16_31", "32_63", "64_up"};
+  for (size_t b = 0; b < 8; ++b) r.set(std::string("faces_with_samples_") + names[b], bins[b]);
+  r.set("sample_allocation", sample_allocation_name(data.allocation));
+  if (data.allocation != SampleAllocation::Pilot) return;
+  r.set("pilot_samples", data.plan.pilot_samples);
+  r.set("pilot_rays", data.plan.rays);
+  r.set("seconds_pilot", data.plan.seconds);
+  r.set("sampled_faces", data.plan.sampled_faces);
+  r.set("interpolated_faces", F - data.plan.sampled_faces);
+}
+
+void record(Report& r, const TopUpStats& t) {
+  r.set("top_up_vertices", t.vertices);
+  r.set("top_up_rays", t.rays);
+  r.set("seconds_top_up", t.seconds);
+  r.set("top_up_variance_before", t.variance_before);
+  r.set("top_up_variance_after", t.variance_after);
+  r.set("top_up_variance_ratio", t.variance_before > 0 ? t.variance_after / t.variance_before : 1.0);
+}
+
 void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& data, int sample_rays) {
   r.set("fit", fit_method_name(o.method));
   if (o.method == FitMethod::Point) return;
   r.set("samples", data.samples.size());
   r.set("sample_rays", sample_rays);
+  record_sample_spread(r, data);
   if (o.method != FitMethod::LeastSquares) return;
   r.set("alpha", o.alpha);
   r.set("regularizer", regularizer_name(o.regularizer));
@@ -87,8 +118,9 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
+  if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up);
   if (o.signal == AssetSignal::Ao) r.set("clamped_values", res.clamped);
-  const double trace_seconds = res.seconds_transfer + res.refine.seconds_signal + res.seconds_samples;
+  const double trace_seconds = res.seconds_transfer + res.refine.seconds_signal + res.seconds_samples + res.seconds_top_up;
   r.set("rays", res.rays);
   r.set("seconds_tracing", trace_seconds);
   r.set("rays_per_second", static_cast<double>(res.rays) / std::max(trace_seconds, 1e-9));
@@ -98,6 +130,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   r.set("seconds_transfer", res.seconds_transfer);
   r.set("seconds_refine", res.seconds_refine);
   r.set("seconds_samples", res.seconds_samples);
+  r.set("seconds_top_up", res.seconds_top_up);
   r.set("seconds_fit", res.seconds_fit);
   r.set("warnings", res.warnings.size());
   record(r, mesh.defects);
@@ -136,17 +169,25 @@ void print_bake_summary(const Report& r) {
   if (fit == "lsq") {
     r.print(stdout, {"  fit:        least squares, {regularizer} regulariser, alpha {alpha}, {mass} mass; {samples} surface "
                      "samples ({sample_rays} rays each, {seconds_samples:3} s)"});
+    if (r.has("pilot_samples"))
+      r.print(stdout, {"              pilot: {pilot_samples} samples ({pilot_rays} rays, {seconds_pilot:3} s) found {sampled_faces} "
+                       "faces where interpolation fails; {interpolated_faces} left to it",
+                       "              faces by samples: 0: {faces_with_samples_0}, 1: {faces_with_samples_1}, 2-3: "
+                       "{faces_with_samples_2_3}, 4-7: {faces_with_samples_4_7}, 8-15: {faces_with_samples_8_15}, 16-31: "
+                       "{faces_with_samples_16_31}, 32-63: {faces_with_samples_32_63}, 64+: {faces_with_samples_64_up}",
+                       "              vertex rays: {top_up_rays} more at the {top_up_vertices} noisiest vertices ({seconds_top_up:3} s); "
+                       "their summed variance x{top_up_variance_ratio:3}"});
     const std::string cg = r.has("fit_cg_note") ? r.format(", {fit_cg_iterations} {fit_cg_note}") : "";
     std::printf("%s\n", r.format("              solve {seconds_fit:3} s (assemble {seconds_fit_assemble:3}, factor "
                                  "{seconds_fit_factor:3}, solve {seconds_fit_solve:3}; {fit_solver}" + cg +
-                                 "), {solve_memory_mib:1} MiB; {fit_unsupported_vertices} vertices unsupported")
+                                 "), {solve_memory_mib:1} MiB; {fit_unsupported_vertices} vertices kept at their point values")
                             .c_str());
     r.print(stdout, {"              weighed by noise: {kept_correction:%1} of the fit's correction kept on average; non-negative "
                      "({non_negative}): {non_negative_limited_vertices} vertices limited"});
   }
   r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)",
                    "  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "
-                   "{seconds_transfer:3}, refine {seconds_refine:3}, samples {seconds_samples:3}, fit {seconds_fit:3}, write "
+                   "{seconds_transfer:3}, refine {seconds_refine:3}, samples {seconds_samples:3}, vertex rays {seconds_top_up:3}, fit {seconds_fit:3}, write "
                    "{seconds_write:3});",
                    "              peak memory {peak_memory_mib:0} MiB"});
 }

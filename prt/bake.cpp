@@ -16,6 +16,7 @@
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/vertex_top_up.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
 #include "prtsub/version.h"
@@ -130,6 +131,12 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   m.push_back({"fit", fit_method_name(o.fit.method)});
   if (o.fit.method != FitMethod::Point) {
     m.push_back({"samples", std::to_string(r.fit_data.samples.size())});
+    m.push_back({"sample_allocation", sample_allocation_name(r.fit_data.allocation)});
+    if (r.fit_data.allocation == SampleAllocation::Pilot) {
+      m.push_back({"pilot_samples", std::to_string(r.fit_data.plan.pilot_samples) + " (" + std::to_string(o.pilot.rays) + " rays each)"});
+      m.push_back({"sampled_faces", std::to_string(r.fit_data.plan.sampled_faces)});
+      m.push_back({"extra_vertex_rays", std::to_string(r.top_up.rays) + " at " + std::to_string(r.top_up.vertices) + " vertices"});
+    }
     m.push_back({"sample_rays", std::to_string(o.sample_rays)});
   }
   if (o.fit.method == FitMethod::LeastSquares) {
@@ -156,10 +163,30 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
   if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
 }
 
+double surface_area(const Mesh& m) {
+  double a = 0;
+  for (const Triangle& t : m.triangles) {
+    const double ta = triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+    if (std::isfinite(ta)) a += ta;
+  }
+  return a;
+}
+
 void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
-  r.fit_data = sample_signal(r.mesh, scene, o, progress);
+  r.fit_data = sample_signal(r.mesh, scene, o, &r.transfer, &r.point_variance, progress);
   r.rays += r.fit_data.rays;
   r.seconds_samples = clock.lap();
+  if (r.fit_data.allocation == SampleAllocation::Pilot && o.vertex_share > 0) {
+    // The rays the pilot saved, against sampling every face: a share goes to the noisiest vertices.
+    const double area_rays = (o.samples.density > 0 ? o.samples.density * surface_area(r.mesh) : o.samples.per_triangle * double(r.mesh.num_faces())) *
+                             o.sample_rays;
+    const double saved = std::max(0.0, area_rays - static_cast<double>(r.fit_data.rays));
+    const TopUpPlan plan = plan_top_up(r.point_variance, o.transfer.rays, static_cast<uint64_t>(o.vertex_share * saved));
+    if (progress.stage) progress.stage("vertex rays", plan.vertices);
+    r.top_up = apply_top_up(r.mesh, scene, o.transfer, o.transfer.rays, plan, r.transfer, r.point_variance, progress.add);
+    r.rays += r.top_up.rays;
+    r.seconds_top_up = clock.lap();
+  }
   r.point = r.transfer;
   r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
   r.seconds_fit = clock.lap();
@@ -168,19 +195,38 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
 
 }  // namespace
 
-FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& in, const BakeProgress& progress) {
+FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& in, const RowMatrixXd* prior,
+                      const std::vector<double>* prior_variance, const BakeProgress& progress) {
   const BakeOptions o = resolve_bake_options(in);
   const Stopwatch clock;
   FitData d;
-  d.samples = make_surface_samples(mesh, o.samples);
   TransferOptions to = o.transfer;
   to.rays = o.sample_rays;
   to.seed = mix64(o.transfer.seed ^ 0x5A3D1E5ull);  // independent of the vertices' rays
   to.stream_offset = 0;
+  SampleOptions so = o.samples;
+  d.allocation = o.allocation == SampleAllocation::Pilot && o.pilot.rays >= 2 && prior && prior_variance
+                     ? SampleAllocation::Pilot : SampleAllocation::Area;
+  if (d.allocation == SampleAllocation::Pilot) {
+    TransferOptions pilot_rays = to;
+    pilot_rays.seed = mix64(o.transfer.seed ^ 0x9170Dull);  // independent of the samples' rays
+    const SurfaceSamples pilot = make_pilot_samples(mesh, o.pilot, mix64(o.samples.seed + 1));
+    if (progress.stage) progress.stage("pilot", pilot.size());
+    d.plan = plan_samples(mesh, scene, pilot, *prior, *prior_variance, pilot_rays, o.pilot, progress.add);
+    // The sampled faces' pilot samples count towards their share of the budget, up to half of it.
+    const double budget = so.density > 0 ? so.density * d.plan.sampled_area : so.per_triangle * double(d.plan.sampled_faces);
+    const double wanted = std::max(0.5 * budget, budget - o.pilot.per_triangle * double(d.plan.sampled_faces));
+    so.density = 0;
+    so.per_triangle = mesh.num_faces() ? std::max(0.0, wanted) / double(mesh.num_faces()) : 0;
+    d.samples = make_surface_samples(mesh, so, d.plan.face_weight);
+    d.rays += d.plan.rays;
+  } else {
+    d.samples = make_surface_samples(mesh, so);
+  }
   if (progress.stage) progress.stage("samples", d.samples.size());
   TransferStats stats;
   d.moments = trace_face_moments(mesh, scene, d.samples, to, &stats, progress.add);
-  d.rays = stats.rays;
+  d.rays += stats.rays;
   d.seconds = clock.total();
   return d;
 }

@@ -18,6 +18,8 @@
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/fit.h"
 #include "prtsub/prt/refine_signal.h"
+#include "prtsub/prt/sample_plan.h"
+#include "prtsub/prt/vertex_top_up.h"
 #include "prtsub/subdiv/refine.h"
 #include "prtsub/subdiv/uniform.h"
 
@@ -41,7 +43,13 @@ struct BakeOptions {
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples
-  SampleOptions samples;                       //!< where the fit's samples go (its seed derives from transfer.seed)
+  SampleOptions samples;                       //!< how many samples the fit gets (its seed derives from transfer.seed)
+  //! which faces get them: Pilot spends them only where interpolation fails (needs sample_rays ≥ 2)
+  SampleAllocation allocation = SampleAllocation::Pilot;
+  PilotOptions pilot;
+  //! Pilot: the share of the sample rays the pilot saved (against sampling every face) that goes
+  //! to more rays at the noisiest vertices instead (top_up_vertices); 0 keeps them unspent
+  double vertex_share = 0.5;
   //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
   int sample_rays = 16;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
@@ -56,6 +64,8 @@ struct BakeProgress {
 
 //! Where the fit's samples and their transfer come from, kept so that several fits can share them.
 struct FitData {
+  SampleAllocation allocation = SampleAllocation::Area;  //!< what ran (Pilot falls back to Area with 1 ray)
+  SamplePlan plan;       //!< Pilot: the pilot's findings (its rays are included in `rays`)
   SurfaceSamples samples;
   FaceMoments moments;  //!< the samples' transfer, reduced face by face as it is traced
   uint64_t rays = 0;
@@ -69,10 +79,11 @@ struct BakeResult {
   std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
   RefineStats refine;    //!< adaptive refinement's counts and times
   FitData fit_data;      //!< the samples (empty when fit is point)
+  TopUpStats top_up;     //!< the second round of vertex rays (Pilot allocation)
   FitStats fit;
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
   uint64_t rays = 0;     //!< every transfer ray traced
-  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_fit = 0,
+  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_top_up = 0, seconds_fit = 0,
          seconds_total = 0;
   std::vector<std::string> warnings;
   Metadata metadata;     //!< what the asset records
@@ -89,8 +100,11 @@ BakeOptions resolve_bake_options(const BakeOptions& options);
 //! Checks options before any work. \throw InputError naming the value at fault
 void check_bake_options(const BakeOptions& options);
 
-//! The fit's samples on `mesh` and their transfer (stage "samples").
-FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& options, const BakeProgress& progress = {});
+//! The fit's samples on `mesh` and their transfer (stages "pilot" and "samples").
+//! \param prior, prior_variance the vertices' point values and their variances: the pilot
+//!        compares its samples with them (Area allocation ignores them; may then be null)
+FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& options, const RowMatrixXd* prior,
+                      const std::vector<double>* prior_variance, const BakeProgress& progress = {});
 
 //! The samples' transfer, reduced to the fit's face moments and their variances as it is traced;
 //! the same for any thread count.

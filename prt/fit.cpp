@@ -91,9 +91,11 @@ SparseMatrixd from_triplets(size_t n, const Triplets& t) {
 }
 
 bool face_has_samples(const SurfaceSamples& s, size_t f) { return f + 1 < s.begin.size() && s.begin[f + 1] > s.begin[f]; }
+bool face_interpolated(const SurfaceSamples& s, size_t f) { return f < s.interpolated.size() && s.interpolated[f]; }
 
 void check_samples(const Mesh& mesh, const SurfaceSamples& s) {
-  if (s.begin.size() != mesh.num_faces() + 1) throw InputError("fit: the samples were drawn on another mesh");
+  if (s.begin.size() != mesh.num_faces() + 1 || (!s.interpolated.empty() && s.interpolated.size() != mesh.num_faces()))
+    throw InputError("fit: the samples were drawn on another mesh");
 }
 
 }  // namespace
@@ -150,9 +152,10 @@ template <class Emit>
 void emit_mass(const Mesh& mesh, const std::vector<FaceGeometry>& g, const SurfaceSamples& s, MassMatrix kind, double scale,
                Emit&& emit) {
   for (size_t f = 0; f < mesh.num_faces(); ++f) {
-    if (!face_has_samples(s, f)) continue;
+    const bool interpolated = face_interpolated(s, f);
+    if (!interpolated && !face_has_samples(s, f)) continue;
     Eigen::Matrix3d local;
-    if (kind == MassMatrix::Analytic) {
+    if (kind == MassMatrix::Analytic || interpolated) {  // an interpolated face's data is exact
       local.setConstant(g[f].area / 12);
       local.diagonal().setConstant(g[f].area / 6);
     } else {
@@ -353,6 +356,9 @@ namespace {
 // Σ_j w_j h_i(p_j)) and b from the face moments, with the control variate's correction.
 struct FaceSums {
   Eigen::VectorXd lumped_analytic, lumped_sampled;
+  //! ∫h_i over the faces with samples only: a vertex without any keeps its prior, since faces
+  //! left to interpolation (SurfaceSamples::interpolated) say only that the prior is right there
+  Eigen::VectorXd support;
   RowMatrixXd b;  // #V by K
 };
 
@@ -365,10 +371,20 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   // ∫h_i (f − g_prior) from the samples and add back the exact ∫h_i g_prior = A·prior: the error
   // is then proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
   const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
-  FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
+  FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
   for (size_t f = 0; f < mesh.num_faces(); ++f) {
-    if (!face_has_samples(s, f)) continue;
     const Triangle& tri = mesh.triangles[f];
+    if (face_interpolated(s, f)) {
+      // No samples, by design: the face's data is the prior's interpolant, so it adds
+      // ∫h_i g_prior = A_f·prior exactly, and its mass to both lumped masses.
+      for (int c = 0; c < 3; ++c) {
+        sums.lumped_analytic[tri[c]] += geom[f].area / 3;
+        sums.lumped_sampled[tri[c]] += geom[f].area / 3;
+        for (int c2 = 0; c2 < 3; ++c2) sums.b.row(tri[c]) += geom[f].area / (c == c2 ? 6.0 : 12.0) * prior.row(tri[c2]);
+      }
+      continue;
+    }
+    if (!face_has_samples(s, f)) continue;
     double ls[3] = {0, 0, 0}, ms[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
     for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) {
       const auto r = static_cast<Eigen::Index>(k);
@@ -381,6 +397,7 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
     for (int c = 0; c < 3; ++c) {
       sums.lumped_analytic[tri[c]] += geom[f].area / 3;
       sums.lumped_sampled[tri[c]] += ls[c];
+      sums.support[tri[c]] += geom[f].area / 3;
       double* row = sums.b.row(tri[c]).data();
       const double* local = moments.rows.row(static_cast<Eigen::Index>(3 * f + size_t(c))).data();
       for (Eigen::Index q = 0; q < K; ++q) row[q] += local[q];
@@ -433,7 +450,7 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   sys.slot.assign(static_cast<size_t>(V), -1);
   Eigen::Index n = 0;
   for (Eigen::Index i = 0; i < V; ++i)
-    if (lumped[i] > 1e-12 * typical) sys.slot[size_t(i)] = n++;
+    if (lumped[i] > 1e-12 * typical && sums.support[i] > 1e-12 * typical) sys.slot[size_t(i)] = n++;
   if (n == V) {
     sys.rhs.swap(sums.b);  // every vertex free, the common case: no copy
   } else {
@@ -699,7 +716,7 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     const double typical = lumped.sum() / static_cast<double>(std::max<size_t>(mesh.num_vertices(), 1));
     std::vector<char> free(mesh.num_vertices());
     for (size_t i = 0; i < free.size(); ++i) {
-      free[i] = lumped[static_cast<Eigen::Index>(i)] > 1e-12 * typical;
+      free[i] = lumped[static_cast<Eigen::Index>(i)] > 1e-12 * typical && sums.support[static_cast<Eigen::Index>(i)] > 1e-12 * typical;
       stats.unsupported += !free[i];
     }
     x = average_values(sums, free, prior);

@@ -17,11 +17,19 @@
 namespace prtsub {
 
 SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o) {
+  return make_surface_samples(mesh, o, std::vector<double>());
+}
+
+SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o, const std::vector<double>& face_weight) {
+  const bool weighted = !face_weight.empty();
+  if (weighted && face_weight.size() != mesh.num_faces()) throw InputError("samples: one weight per face expected");
+  for (double w : face_weight)
+    if (!(w >= 0) || !std::isfinite(w)) throw InputError("samples: face weights must be finite and non-negative");
   if (!(o.per_triangle >= 0) || !std::isfinite(o.per_triangle) || !(o.density >= 0) || !std::isfinite(o.density))
     throw InputError("samples: counts must be finite and non-negative");
   const size_t F = mesh.num_faces();
-  std::vector<double> area(F);
-  double total_area = 0;
+  std::vector<double> area(F), share(F);  // share: the area the extra samples are spread by
+  double total_area = 0, total_share = 0;
   for (size_t f = 0; f < F; ++f) {
     const Triangle& t = mesh.triangles[f];
     area[f] = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
@@ -32,26 +40,35 @@ SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o) {
   const double tiny = 1e-14 * total_area / static_cast<double>(std::max<size_t>(F, 1));
   std::vector<size_t> count(F, 0);
   size_t fixed = 0;
-  for (size_t f = 0; f < F; ++f)
-    if (area[f] > tiny) count[f] = o.min_per_triangle, fixed += o.min_per_triangle;
+  SurfaceSamples s;
+  if (weighted) s.interpolated.assign(F, 0);
+  for (size_t f = 0; f < F; ++f) {
+    if (!(area[f] > tiny)) continue;
+    if (weighted && face_weight[f] == 0) {
+      s.interpolated[f] = 1;
+      continue;
+    }
+    count[f] = o.min_per_triangle, fixed += o.min_per_triangle;
+    share[f] = weighted ? area[f] * face_weight[f] : area[f];
+    total_share += share[f];
+  }
   const double wanted = o.density > 0 ? o.density * total_area : o.per_triangle * static_cast<double>(F);
   if (wanted > 4e9) throw InputError("samples: " + std::to_string(wanted) + " samples requested; at most 4e9");
   const size_t extra = wanted > static_cast<double>(fixed) ? static_cast<size_t>(std::llround(wanted)) - fixed : 0;
-  if (extra > 0 && total_area > 0) {
-    // Systematic sampling of the cumulative area: sample k lands at (k + r) / extra of it.
+  if (extra > 0 && total_share > 0) {
+    // Systematic sampling of the cumulative share: sample k lands at (k + r) / extra of it.
     Rng rng(o.seed, 0);
-    const double r = rng.uniform(), step = total_area / static_cast<double>(extra);
+    const double r = rng.uniform(), step = total_share / static_cast<double>(extra);
     double cumulative = 0;
     size_t k = 0;
     for (size_t f = 0; f < F && k < extra; ++f) {
-      cumulative += area[f] > tiny ? area[f] : 0;
+      cumulative += share[f];
       while (k < extra && (static_cast<double>(k) + r) * step < cumulative) ++count[f], ++k;
     }
-    for (size_t f = F; k < extra && f-- > 0;)  // rounding left some over: give them to the last face with area
-      if (area[f] > tiny) count[f] += extra - k, k = extra;
+    for (size_t f = F; k < extra && f-- > 0;)  // rounding left some over: give them to the last face with a share
+      if (share[f] > 0) count[f] += extra - k, k = extra;
   }
 
-  SurfaceSamples s;
   s.begin.assign(F + 1, 0);
   for (size_t f = 0; f < F; ++f) s.begin[f + 1] = s.begin[f] + count[f];
   const size_t S = s.begin[F];

@@ -24,6 +24,10 @@ struct SurfaceSamples {
   std::vector<uint32_t> face;   //!< #S
   std::vector<size_t> begin;    //!< #F + 1
   std::vector<double> weight;   //!< #S: the face's area over its sample count (Monte Carlo weight)
+  //! #F, or empty: faces given no samples because interpolating the vertex values already
+  //! reproduces the signal there (a pilot pass said so); the fit takes the prior's interpolant
+  //! as their data instead of leaving them out
+  std::vector<char> interpolated;
   size_t size() const { return face.size(); }
 };
 
@@ -34,5 +38,11 @@ struct SurfaceSamples {
 //! Zero-area faces get none. The result depends on the mesh and the seed only.
 //! \throw InputError for a non-finite or negative count
 SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& options);
+
+//! The same with a sample density per face: the samples beyond each face's minimum are shared
+//! in proportion to area × face_weight[f] (finite, ≥ 0), and a face of weight 0 gets none at
+//! all, not even the minimum, and is marked `interpolated`.
+//! \throw InputError for a weight vector of the wrong size or a negative or non-finite weight
+SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& options, const std::vector<double>& face_weight);
 
 }  // namespace prtsub

@@ -33,7 +33,8 @@ TEST(Bake, AdaptiveRefinementIsIdenticalForAnyThreadCount) {
 TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
   const Mesh mesh = sphere_on_plane();
   BakeOptions o;
-  o.transfer.rays = 16, o.sample_rays = 4, o.samples.per_triangle = 4;
+  o.transfer.rays = 16, o.sample_rays = 4, o.samples.per_triangle = 16;
+  o.pilot.rays = 16, o.pilot.per_triangle = 1, o.pilot.min_samples = 0;  // a pilot cheap enough to leave rays for the vertices
   o.source = "sphere on plane";
   std::mutex m;
   std::map<std::string, size_t> totals, done;
@@ -53,7 +54,17 @@ TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
   EXPECT_EQ(done["transfer"], mesh.num_vertices());
   EXPECT_EQ(totals["samples"], r.fit_data.samples.size());
   EXPECT_EQ(done["samples"], r.fit_data.samples.size());
-  EXPECT_EQ(r.rays, uint64_t(16) * mesh.num_vertices() + uint64_t(4) * r.fit_data.samples.size());
+  // The pilot found where interpolation fails, and the rays it saved went to noisy vertices.
+  ASSERT_EQ(r.fit_data.allocation, SampleAllocation::Pilot);
+  EXPECT_EQ(totals["pilot"], r.fit_data.plan.pilot_samples);
+  EXPECT_EQ(done["pilot"], r.fit_data.plan.pilot_samples);
+  EXPECT_EQ(totals["vertex rays"], r.top_up.vertices);
+  EXPECT_EQ(done["vertex rays"], r.top_up.vertices);
+  EXPECT_GT(r.top_up.rays, 0u);
+  EXPECT_LT(r.top_up.variance_after, r.top_up.variance_before);
+  EXPECT_GT(r.fit_data.plan.sampled_faces, 0u);
+  EXPECT_EQ(r.fit_data.plan.rays, uint64_t(o.pilot.rays) * r.fit_data.plan.pilot_samples);
+  EXPECT_EQ(r.rays, uint64_t(16) * mesh.num_vertices() + r.fit_data.plan.rays + uint64_t(4) * r.fit_data.samples.size() + r.top_up.rays);
   std::map<std::string, std::string> meta(r.metadata.begin(), r.metadata.end());
   EXPECT_EQ(meta["generator"], std::string("prtsub ") + kVersion);
   EXPECT_EQ(meta["source"], "sphere on plane");

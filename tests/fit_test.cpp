@@ -24,33 +24,6 @@ FitOptions plain_fit() {
 
 using Signal = std::function<double(const Eigen::Vector3d&)>;
 
-// An n×n grid over [0,1]² at z = 0, two triangles per cell; interior points jittered (seeded)
-// so that areas differ, as on real meshes.
-RawMesh grid(int n, double jitter = 0.25, uint64_t seed = 3) {
-  RawMesh m;
-  m.positions.resize((n + 1) * (n + 1), 3);
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      double x = double(i) / n, y = double(j) / n;
-      if (i > 0 && i < n && j > 0 && j < n) {
-        Rng r(seed, uint64_t(j * (n + 1) + i));
-        x += jitter / n * (r.uniform() - 0.5), y += jitter / n * (r.uniform() - 0.5);
-      }
-      m.positions.row(j * (n + 1) + i) << x, y, 0;
-    }
-  m.face_offsets.push_back(0);
-  auto face = [&](int64_t a, int64_t b, int64_t c) {
-    m.face_indices.insert(m.face_indices.end(), {a, b, c});
-    m.face_offsets.push_back(m.face_indices.size());
-  };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int64_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      face(a, b, c), face(a, c, d);
-    }
-  return m;
-}
-
 RowMatrixXd at_vertices(const Mesh& m, const Signal& f) {
   RowMatrixXd v(Eigen::Index(m.num_vertices()), 1);
   for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = f(m.point(i));
@@ -96,7 +69,7 @@ double l2_error(const Mesh& m, const RowMatrixXd& x, const Signal& f) {
 double sigmoid(const Eigen::Vector3d& p) { return 1 / (1 + std::exp(-(p.x() - 0.37) / 0.03)); }
 
 TEST(SurfaceSamples, EveryFaceGetsItsMinimumAndTheRestGoesByArea) {
-  Mesh m = test::build(grid(6, 0.6));
+  Mesh m = test::build(test::grid(6, 0.6));
   SampleOptions o;
   o.per_triangle = 10, o.min_per_triangle = 2;
   SurfaceSamples s = make_surface_samples(m, o);
@@ -132,8 +105,48 @@ TEST(SurfaceSamples, EveryFaceGetsItsMinimumAndTheRestGoesByArea) {
   EXPECT_NE(make_surface_samples(m, o).points, s.points);
 }
 
+TEST(SurfaceSamples, FaceWeightsSteerTheExtraSamplesAndWeightZeroLeavesAFaceToInterpolation) {
+  Mesh m = test::build(test::grid(6, 0.6));
+  SampleOptions o;
+  o.per_triangle = 10, o.min_per_triangle = 1;
+  std::vector<double> w(m.num_faces());
+  for (size_t f = 0; f < w.size(); ++f) w[f] = f % 3 == 0 ? 0.0 : f % 3 == 1 ? 3.0 : 1.0;
+  const SurfaceSamples s = make_surface_samples(m, o, w);
+  ASSERT_EQ(s.interpolated.size(), m.num_faces());
+  EXPECT_EQ(s.size(), 10 * m.num_faces());
+  double share_total = 0;
+  size_t weighted_faces = 0;
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const Triangle& t = m.triangles[f];
+    if (w[f] > 0) share_total += w[f] * triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2])), ++weighted_faces;
+  }
+  const double extra = double(s.size() - weighted_faces);
+  double worst = 0;
+  for (size_t f = 0; f < m.num_faces(); ++f) {
+    const size_t n = s.begin[f + 1] - s.begin[f];
+    EXPECT_EQ(s.interpolated[f] != 0, w[f] == 0) << f;
+    if (w[f] == 0) {
+      EXPECT_EQ(n, 0u);
+      continue;
+    }
+    const Triangle& t = m.triangles[f];
+    const double a = triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+    worst = std::max(worst, std::abs(double(n - 1) - extra * w[f] * a / share_total));  // systematic: within one
+    double wsum = 0;
+    for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) wsum += s.weight[k];
+    EXPECT_NEAR(wsum, a, 1e-12);
+  }
+  EXPECT_LE(worst, 1.0 + 1e-9);
+  EXPECT_TRUE(make_surface_samples(m, o).interpolated.empty());  // no weights, no interpolated faces
+  EXPECT_THROW(make_surface_samples(m, o, std::vector<double>(3, 1.0)), InputError);
+  w[1] = -1;
+  EXPECT_THROW(make_surface_samples(m, o, w), InputError);
+  w[1] = NAN;
+  EXPECT_THROW(make_surface_samples(m, o, w), InputError);
+}
+
 TEST(SurfaceSamples, DensityModeAndZeroAreaFaces) {
-  RawMesh r = grid(4, 0);
+  RawMesh r = test::grid(4, 0);
   // A zero-area face (three collinear points) beside the grid.
   const Eigen::Index base = r.positions.rows();
   r.positions.conservativeResize(base + 3, 3);
@@ -154,7 +167,7 @@ TEST(SurfaceSamples, DensityModeAndZeroAreaFaces) {
 TEST(SurfaceSamples, EachSampleIsUniformOnItsFace) {
   // The mean of x² over all samples estimates ∫x²/area = 1/3 on the unit square without bias;
   // with the lattice the error is far below the iid standard error, which bounds it here.
-  Mesh m = test::build(grid(3, 0.5));
+  Mesh m = test::build(test::grid(3, 0.5));
   SampleOptions o;
   o.per_triangle = 50;
   double worst = 0;
@@ -170,7 +183,7 @@ TEST(SurfaceSamples, EachSampleIsUniformOnItsFace) {
 }
 
 TEST(FitMatrices, AnalyticMassIntegratesPiecewiseLinearProductsExactly) {
-  Mesh m = test::build(grid(5, 0.5));
+  Mesh m = test::build(test::grid(5, 0.5));
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   const SparseMatrixd A = mass_matrix(m, s, MassMatrix::Analytic);
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(A.rows());
@@ -189,7 +202,7 @@ TEST(FitMatrices, AnalyticMassIntegratesPiecewiseLinearProductsExactly) {
 
 TEST(FitMatrices, GradientRegularizerIsAreaScaledDirichletEnergy) {
   const int n = 6;
-  Mesh m = test::build(grid(n, 0));
+  Mesh m = test::build(test::grid(n, 0));
   const SparseMatrixd R = gradient_regularizer(m);
   Eigen::VectorXd one = Eigen::VectorXd::Ones(R.rows()), x(R.rows());
   EXPECT_LT((R * one).norm(), 1e-12);
@@ -200,7 +213,7 @@ TEST(FitMatrices, GradientRegularizerIsAreaScaledDirichletEnergy) {
 }
 
 TEST(FitMatrices, EdgeRegularizerIgnoresLinearFunctionsAndCreases) {
-  Mesh m = test::build(grid(5, 0.5));
+  Mesh m = test::build(test::grid(5, 0.5));
   size_t interior = 0;
   const SparseMatrixd R = edge_regularizer(m, &interior);
   EXPECT_EQ(interior, 3u * 5 * 5 - 2 * 5);  // every edge not on the square's boundary
@@ -245,7 +258,7 @@ FitRun run_fits(const Mesh& m, const Signal& f, const SampleOptions& so, double 
 }
 
 TEST(Fit, LeastSquaresBeatsAverageBeatsPointOnAShadowEdge) {
-  Mesh m = test::build(grid(8, 0.5));
+  Mesh m = test::build(test::grid(8, 0.5));
   SampleOptions so;
   so.per_triangle = 64;  // dense, as the paper's E_lsq: with few samples α = 0 fits the noise
   FitRun r = run_fits(m, sigmoid, so);
@@ -302,7 +315,7 @@ TEST(Fit, LeastSquaresBeatsAverageBeatsPointOnAShadowEdge) {
 TEST(Fit, SampledMassAndEdgeRegularizerReproduceLinearSignalsExactly) {
   // With the sampled mass matrix the fit is discrete least squares on the samples: a linear f
   // is interpolated exactly by its own vertex values, and R_edge does not object to it.
-  Mesh m = test::build(grid(6, 0.5));
+  Mesh m = test::build(test::grid(6, 0.5));
   const Signal f = [](const Eigen::Vector3d& p) { return 0.3 + 2 * p.x() - 5 * p.y(); };
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   FitOptions o = plain_fit();
@@ -379,9 +392,54 @@ TEST(Fit, ConjugateGradientsAgreeWithCholmodAndFallBackWhenTheyStall) {
   EXPECT_EQ(st.cg_iterations, 0);
 }
 
+TEST(Fit, FacesLeftToInterpolationHoldTheirVerticesAtThePrior) {
+  // Interpolated faces say "the prior is right here": a vertex with no sampled face keeps its
+  // prior exactly (even a wrong one), and where the prior is the exact linear signal the fit
+  // reproduces it with any mix of sampled and interpolated faces.
+  const Mesh m = test::build(test::grid(6, 0.5));
+  const Signal f = [](const Eigen::Vector3d& p) { return 0.3 + 2 * p.x() - 5 * p.y(); };
+  SampleOptions so;
+  std::vector<double> w(m.num_faces(), 1.0);
+  for (size_t k = 0; k < m.num_faces(); ++k) {  // faces left of x = 0.5 to interpolation
+    const Triangle& t = m.triangles[k];
+    if ((m.point(t[0]) + m.point(t[1]) + m.point(t[2])).x() / 3 < 0.5) w[k] = 0;
+  }
+  const SurfaceSamples s = make_surface_samples(m, so, w);
+  for (MassMatrix mass : {MassMatrix::Analytic, MassMatrix::Sampled}) {
+    FitOptions o = plain_fit();
+    o.mass = mass;
+    const RowMatrixXd exact = at_vertices(m, f);
+    EXPECT_LT((fit_vertex_values(m, s, at_samples(s, f), exact, o) - exact).cwiseAbs().maxCoeff(), 1e-9) << mass_matrix_name(mass);
+    // A wrong prior: vertices whose faces are all interpolated keep it, the others move to f.
+    RowMatrixXd wrong = exact;
+    wrong.array() += 0.5;
+    FitStats st;
+    const RowMatrixXd x = fit_vertex_values(m, s, at_samples(s, f), wrong, o, &st);
+    size_t held = 0;
+    for (uint32_t i = 0; i < m.num_vertices(); ++i) {
+      bool sampled = false;
+      for (size_t k = 0; k < m.num_faces(); ++k)
+        for (int c = 0; c < 3; ++c) sampled |= m.triangles[k][c] == i && w[k] > 0;
+      if (!sampled) {
+        EXPECT_EQ(x(i, 0), wrong(i, 0));
+        ++held;
+      } else if (m.point(i).x() > 0.7) {
+        EXPECT_NEAR(x(i, 0), exact(i, 0), 0.05) << i;  // far from the interpolated side
+      }
+    }
+    EXPECT_GT(held, 10u);
+    EXPECT_EQ(st.unsupported, held);
+  }
+  // Every face interpolated: the prior, untouched.
+  const SurfaceSamples none = make_surface_samples(m, so, std::vector<double>(m.num_faces(), 0.0));
+  const RowMatrixXd prior = at_vertices(m, sigmoid);
+  EXPECT_EQ(none.size(), 0u);
+  EXPECT_EQ(fit_vertex_values(m, none, RowMatrixXd(0, 1), prior, plain_fit()), prior);
+}
+
 TEST(FitStability, SliversBelowOneHundredthOfADegree) {
   // Pull one interior grid vertex to within 1e-6 of a grid line: faces with angles ~1e-4°.
-  RawMesh r = grid(6, 0);
+  RawMesh r = test::grid(6, 0);
   r.positions(3 * 7 + 3, 1) = r.positions(2 * 7 + 3, 1) + 1e-6;
   Mesh m = test::build(r);
   double min_angle = 180;
@@ -403,19 +461,19 @@ TEST(FitStability, SliversBelowOneHundredthOfADegree) {
   // A shadow edge over the slivers: every fit stays finite, and the slivers make nothing worse
   // than on the same grid without them (same samples per face, same signal).
   FitRun fr = run_fits(m, sigmoid, SampleOptions{});
-  FitRun plain = run_fits(test::build(grid(6, 0)), sigmoid, SampleOptions{});
+  FitRun plain = run_fits(test::build(test::grid(6, 0)), sigmoid, SampleOptions{});
   EXPECT_TRUE(fr.lsq.allFinite() && fr.lsq_alpha.allFinite() && fr.average.allFinite());
   auto overshoot = [](const RowMatrixXd& x) { return std::max(x.maxCoeff() - 1, -x.minCoeff()); };
   EXPECT_LE(overshoot(fr.average), 0.0);  // a weighted average of values in [0, 1]
   EXPECT_LT(overshoot(fr.lsq_alpha), overshoot(plain.lsq_alpha) + 0.05);
   EXPECT_LT(overshoot(fr.lsq), overshoot(plain.lsq) + 0.05);
-  const Mesh plain_mesh = test::build(grid(6, 0));
+  const Mesh plain_mesh = test::build(test::grid(6, 0));
   EXPECT_LT(l2_error(m, fr.lsq_alpha, sigmoid), 1.25 * l2_error(plain_mesh, plain.lsq_alpha, sigmoid));
   EXPECT_LT(l2_error(m, fr.average, sigmoid), 1.25 * l2_error(plain_mesh, plain.average, sigmoid));
 }
 
 TEST(FitStability, NearZeroAreaTrianglesIsolatedAndUnsampledVertices) {
-  RawMesh r = grid(5, 0.4);
+  RawMesh r = test::grid(5, 0.4);
   const Eigen::Index base = r.positions.rows();
   // A separate triangle of relative area 1e-22 (no samples, no gradient), one of ordinary area
   // that the density below leaves without samples, and an isolated vertex.
@@ -463,7 +521,7 @@ TEST(FitStability, NearZeroAreaTrianglesIsolatedAndUnsampledVertices) {
 }
 
 TEST(FitStability, TranslationAndScaleDoNotChangeTheResult) {
-  RawMesh r = grid(6, 0.5);
+  RawMesh r = test::grid(6, 0.5);
   Mesh m = test::build(r);
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   const RowMatrixXd values = at_samples(s, sigmoid), prior = at_vertices(m, sigmoid);
@@ -520,7 +578,7 @@ TEST(FitStability, SingularMassMatrixFallsBackToThePointValues) {
 }
 
 TEST(FitStability, BadInputIsAnErrorNotNaN) {
-  Mesh m = test::build(grid(2));
+  Mesh m = test::build(test::grid(2, 0.25));
   SurfaceSamples s = make_surface_samples(m, SampleOptions{});
   RowMatrixXd values = RowMatrixXd::Ones(Eigen::Index(s.size()), 1);
   const RowMatrixXd prior = RowMatrixXd::Ones(Eigen::Index(m.num_vertices()), 1);
@@ -576,7 +634,7 @@ TEST(FitNoise, WhereTheCorrectionIsNoiseThePointSamplesStay) {
   // goes. (A positive-part shrinkage keeps a little where a vertex's noisy ‖x − prior‖² happens to
   // look like bias; with 16 columns that is rare.)
   const int K = 16;
-  const Mesh m = test::build(grid(16));
+  const Mesh m = test::build(test::grid(16, 0.25));
   const Signal f = [](const Eigen::Vector3d& p) { return 0.2 + 0.5 * p.x() - 0.3 * p.y(); };
   SampleOptions so;
   so.per_triangle = 8;
@@ -602,7 +660,7 @@ TEST(FitNoise, WhereTheCorrectionIsNoiseThePointSamplesStay) {
 TEST(FitNoise, WhereTheCorrectionIsSystematicTheFitStays) {
   // A coarse grid and a sharp step inside its faces: point samples miss it, exact samples (no
   // noise: variance 0) see it. The whole correction is kept: the weighed fit is the plain fit.
-  const Mesh m = test::build(grid(4));
+  const Mesh m = test::build(test::grid(4, 0.25));
   SampleOptions so;
   so.per_triangle = 64;
   const SurfaceSamples s = make_surface_samples(m, so);
@@ -625,7 +683,7 @@ TEST(FitNonNegative, ConstantKeepsEveryDcCoefficientAtOrAboveZero) {
   // A step from 0 to 1 on a coarse grid: the L2 projection overshoots below 0 beside the step
   // (the hat functions' Gibbs effect), where every point sample is ≥ 0. Constant clamps exactly
   // those DC coefficients and changes nothing else.
-  const Mesh m = test::build(grid(4));
+  const Mesh m = test::build(test::grid(4, 0.25));
   const Signal step = [](const Eigen::Vector3d& p) { return p.x() > 0.37 ? 1.0 : 0.0; };
   SampleOptions so;
   so.per_triangle = 256;
@@ -649,7 +707,7 @@ TEST(FitNonNegative, DirectionsKeepTheTransferFunctionAboveThePriorsMinimum) {
   // step across the grid; the fit's mix of the two lobes overshoots into negative values. At the
   // 128 Fibonacci directions of keep_non_negative, the limited transfer function stays at or above
   // min(0, the prior's minimum there), vertex by vertex.
-  const Mesh m = test::build(grid(4));
+  const Mesh m = test::build(test::grid(4, 0.25));
   SampleOptions so;
   so.per_triangle = 128;
   const SurfaceSamples s = make_surface_samples(m, so);

@@ -1,0 +1,175 @@
+// The pilot pass that decides where the fit's samples go (Kavan et al. 2011, section 4.1,
+// classify faces by how well interpolation reproduces them; issue 11).
+//
+// The fit can only improve on the vertex values where the signal inside a face is not what
+// their linear interpolant says: a shadow edge or a contact shadow crossing a face. On a dense
+// scan that is a few faces in a hundred, and sampling every face spends most of a bake's rays
+// on faces the interpolant already reproduces. So we first trace a few samples per face
+// (`per_triangle`, spread by area) and compare each with the prior interpolated at it:
+//
+//   r = f̂(p) − Σ_c h_c(p) x̂_c,   E‖r‖² = ‖β(p)‖² + v,   v = var f̂(p) + Σ_c h_c² var x̂_c,
+//
+// β the interpolation error and v the two estimates' noise, both measured (the transfer
+// estimator's two ray halves). d = ‖r‖² − v is an unbiased estimate of ‖β‖², with a standard
+// deviation of about √2·v. One sample says little, so each face pools the samples of the faces
+// within `rings` vertex rings of its face (each sample once): the face needs samples when Σd
+// exceeds `significance` standard errors, √(2Σv²). A face that does not is left to
+// interpolation (no samples; the fit uses the prior's interpolant as its data). Among the
+// sampled faces the density follows area_share·1 + (1 − area_share)·√ē_f / mean, ē_f the mean
+// excess over the faces sharing a corner with f (a tighter pool than the test's): Neyman's
+// allocation by the estimated error, mixed with a uniform share so a face whose pilot missed a
+// shadow still gets its samples.
+//
+// The pilot's own samples are not reused in the fit: its allocation would depend on their
+// values, and the fit's moments would no longer be unbiased.
+#include "prtsub/prt/sample_plan.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cmath>
+
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/stopwatch.h"
+
+namespace prtsub {
+
+SampleAllocation parse_sample_allocation(const std::string& name) {
+  if (name == "area") return SampleAllocation::Area;
+  if (name == "pilot") return SampleAllocation::Pilot;
+  throw InputError("unknown sample allocation '" + name + "' (area, pilot)");
+}
+
+const char* sample_allocation_name(SampleAllocation a) { return a == SampleAllocation::Area ? "area" : "pilot"; }
+
+SurfaceSamples make_pilot_samples(const Mesh& mesh, const PilotOptions& o, uint64_t seed) {
+  if (!(o.per_triangle > 0) || !std::isfinite(o.per_triangle)) throw InputError("sample plan: pilot samples must be positive");
+  SampleOptions so;
+  const double F = static_cast<double>(std::max<size_t>(mesh.num_faces(), 1));
+  so.per_triangle = std::max(o.per_triangle, static_cast<double>(o.min_samples) / F);
+  so.min_per_triangle = 1;
+  so.seed = seed;
+  return make_surface_samples(mesh, so);
+}
+
+SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& pilot, const RowMatrixXd& prior,
+                        const std::vector<double>& prior_variance, const TransferOptions& rays,
+                        const PilotOptions& o, const ProgressFn& progress) {
+  const size_t V = mesh.num_vertices(), F = mesh.num_faces();
+  if (static_cast<size_t>(prior.rows()) != V || prior_variance.size() != V)
+    throw InputError("sample plan: the prior and its variance need one row per vertex");
+  TransferOptions to = rays;
+  to.rays = o.rays;
+  if (to.rays < 2) throw InputError("sample plan: the pilot needs at least 2 rays per sample for a variance");
+  if (!(o.significance >= 0) || !(o.area_share >= 0 && o.area_share <= 1))
+    throw InputError("sample plan: the significance must be non-negative and the area share in [0, 1]");
+  if (pilot.begin.size() != F + 1) throw InputError("sample plan: the pilot samples were drawn on another mesh");
+  const Stopwatch clock;
+  const size_t S = pilot.size();
+  const Eigen::Index K = prior.cols();
+  if (rays.order * rays.order != K) throw InputError("sample plan: the prior's columns do not match the SH order");
+
+  // Each sample's excess d = ‖r‖² − v and noise v, traced in groups of 64.
+  std::vector<double> excess(S, 0.0), noise(S, 0.0);
+  std::vector<size_t> group_begin;
+  for (size_t k = 0; k < S; k += 64) group_begin.push_back(k);
+  group_begin.push_back(S);
+  TransferStats stats;
+  shadowed_transfer_groups(
+      scene, pilot.points, pilot.normals, group_begin, to,
+      [&](size_t g, const double* values, const double* variance, size_t rows) {
+        Eigen::VectorXd r(K);
+        for (size_t j = 0; j < rows; ++j) {
+          const size_t k = group_begin[g] + j;
+          const Triangle& t = mesh.triangles[pilot.face[k]];
+          double v = variance[j];
+          for (Eigen::Index q = 0; q < K; ++q) r[q] = values[j * size_t(K) + size_t(q)];
+          for (int c = 0; c < 3; ++c) {
+            const double h = pilot.barycentric(static_cast<Eigen::Index>(k), c);
+            r -= h * prior.row(t[c]).transpose();
+            v += h * h * prior_variance[t[c]];
+          }
+          noise[k] = v;
+          excess[k] = r.squaredNorm() - v;
+        }
+      },
+      &stats, progress, &pilot.offsets);
+
+  // Per face: the sums of its samples' excess and squared noise.
+  std::vector<double> face_sum(F, 0.0), face_v2(F, 0.0);
+  std::vector<size_t> face_count(F, 0);
+  std::vector<char> unknown(F, 0);  // a noise we could not estimate: sample to be safe
+  for (size_t k = 0; k < S; ++k) {
+    const size_t f = pilot.face[k];
+    if (!std::isfinite(noise[k]) || !std::isfinite(excess[k])) {
+      unknown[f] = 1;
+      continue;
+    }
+    face_sum[f] += excess[k], face_v2[f] += noise[k] * noise[k], ++face_count[f];
+  }
+  // Rounding: an exact estimate (an open point, whose transfer the control variate makes exact)
+  // leaves residuals of ~1e-16 and no noise to weigh them against.
+  double typical = 0;
+  for (Eigen::Index i = 0; i < prior.rows(); ++i) typical += prior.row(i).squaredNorm();
+  const double rounding = 1e-20 * typical / static_cast<double>(std::max<size_t>(V, 1));
+
+  // Each face pools the faces within `rings` vertex rings of it, each sample once, so the pooled
+  // sum's noise is √(2Σv²) exactly as for one face.
+  std::vector<size_t> vf_begin(V + 1, 0), vf;  // vertex → faces
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) ++vf_begin[t[c] + 1];
+  for (size_t i = 0; i < V; ++i) vf_begin[i + 1] += vf_begin[i];
+  vf.resize(vf_begin[V]);
+  {
+    std::vector<size_t> fill(vf_begin.begin(), vf_begin.end() - 1);
+    for (size_t f = 0; f < F; ++f)
+      for (int c = 0; c < 3; ++c) vf[fill[mesh.triangles[f][c]]++] = f;
+  }
+  SamplePlan plan;
+  plan.face_weight.assign(F, 0.0);
+  std::vector<double> raw(F, 0.0), area(F, 0.0);
+  std::vector<size_t> face_mark(F, SIZE_MAX), vertex_mark(V, SIZE_MAX), ring, next;
+  double weighted = 0, total_area = 0;
+  for (size_t f = 0; f < F; ++f) {
+    // Faces within `rings` rings: grow from f's corners, marking faces and vertices with f.
+    ring.assign(mesh.triangles[f].begin(), mesh.triangles[f].end());
+    for (uint32_t v : mesh.triangles[f]) vertex_mark[v] = f;
+    double sum = 0, v2 = 0, n = 0, sum1 = 0, n1 = 0;  // sum1, n1: the first ring's, for the density
+    bool unsure = false;
+    for (int r = 0; r < std::max(1, o.rings); ++r) {
+      next.clear();
+      for (size_t v : ring)
+        for (size_t j = vf_begin[v]; j < vf_begin[v + 1]; ++j) {
+          const size_t g = vf[j];
+          if (face_mark[g] == f) continue;
+          face_mark[g] = f;
+          sum += face_sum[g], v2 += face_v2[g], n += static_cast<double>(face_count[g]);
+          unsure |= unknown[g] != 0;
+          for (uint32_t u : mesh.triangles[g])
+            if (vertex_mark[u] != f) vertex_mark[u] = f, next.push_back(u);
+        }
+      ring.swap(next);
+      if (r == 0) sum1 = sum, n1 = n;
+    }
+    if (!unsure && !(n > 0 && sum > o.significance * std::sqrt(2 * v2) + n * rounding)) continue;
+    const Triangle& t = mesh.triangles[f];
+    raw[f] = n1 > 0 ? std::sqrt(std::max(0.0, sum1 / n1)) : 0;
+    area[f] = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
+    if (!std::isfinite(area[f])) area[f] = 0;
+    weighted += area[f] * raw[f], total_area += area[f];
+    plan.face_weight[f] = 1;
+  }
+  const double mean = total_area > 0 ? weighted / total_area : 0;
+  for (size_t f = 0; f < F; ++f) {
+    if (plan.face_weight[f] == 0) continue;
+    ++plan.sampled_faces;
+    plan.sampled_area += area[f];
+    // (a floor: a face that is sampled only for an unknown noise keeps its minimum)
+    if (mean > 0) plan.face_weight[f] = std::max(1e-3, o.area_share + (1 - o.area_share) * raw[f] / mean);
+  }
+  plan.pilot_samples = S;
+  plan.rays = stats.rays;
+  plan.seconds = clock.total();
+  return plan;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,65 @@
+// Where the fit's surface samples go: a pilot pass finds the faces where interpolating the
+// vertex values fails, and only those get samples.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "prtsub/prt/surface_samples.h"
+#include "prtsub/prt/transfer.h"
+
+namespace prtsub {
+
+//!  - Area: every face of positive area gets samples, in proportion to its area (the paper's).
+//!  - Pilot: a pilot pass measures, face by face, how far the signal is from the interpolated
+//!    vertex values beyond what their noise explains. Faces where it is not significantly
+//!    different get no samples (the fit takes the interpolant as their data); the others share
+//!    the budget by area and by that difference.
+enum class SampleAllocation { Area, Pilot };
+SampleAllocation parse_sample_allocation(const std::string& name);  //!< area, pilot \throw InputError
+const char* sample_allocation_name(SampleAllocation a);
+
+struct PilotOptions {
+  double per_triangle = 2;  //!< pilot samples per triangle (one each, the rest spread by area) ...
+  //! ... and at least this many in all: a coarse mesh's large faces need several each to show a
+  //! shadow inside them, and on a small mesh they cost nothing
+  size_t min_samples = 4096;
+  //! rays per pilot sample: its test weighs ‖r‖² against the noise v, whose spread falls as
+  //! 1/rays but only as 1/√samples, so a few well-traced samples find more than many noisy ones
+  int rays = 32;
+  //! a face pools the pilot samples of the faces within this many vertex rings of it (1: the
+  //! faces sharing a corner with it; 2: theirs too): a subtle bias spread over a region shows
+  //! only in a wider pool
+  int rings = 2;
+  //! a face needs samples when its pool's mean excess residual is this many of its own
+  //! standard errors above zero
+  double significance = 2;
+  //! share of a face's sample density that follows its area alone; the rest follows its
+  //! estimated interpolation error (a floor against a pilot that missed a shadow)
+  double area_share = 0.5;
+};
+
+//! What the pilot found: per-face sample weights for make_surface_samples, and figures.
+struct SamplePlan {
+  std::vector<double> face_weight;  //!< #F: 0 where interpolation suffices, else relative density
+  size_t pilot_samples = 0;
+  size_t sampled_faces = 0;         //!< faces with a positive weight
+  double sampled_area = 0;          //!< their area
+  uint64_t rays = 0;
+  double seconds = 0;
+};
+
+//! The pilot's samples: `options.per_triangle` per face (at least `min_samples` in all), one on
+//! each face of positive area and the rest by area.
+SurfaceSamples make_pilot_samples(const Mesh& mesh, const PilotOptions& options, uint64_t seed);
+
+//! The pilot pass: `pilot` (from make_pilot_samples) traced with `options.rays` (at least 2, for
+//! a variance) and the order, seed and threads of `rays`, each compared with the prior
+//! interpolated at it.
+//! \param prior #V by K, the vertices' point values; prior_variance #V, their variances
+//! \throw InputError for shapes that do not match the mesh
+SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& pilot, const RowMatrixXd& prior,
+                        const std::vector<double>& prior_variance, const TransferOptions& rays,
+                        const PilotOptions& options, const ProgressFn& progress = {});
+
+}  // namespace prtsub

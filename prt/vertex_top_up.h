@@ -1,0 +1,44 @@
+// More rays for the vertices whose transfer is noisiest: a second round of vertex tracing that
+// spends a ray budget where it lowers the summed variance most.
+#pragma once
+
+#include <vector>
+
+#include "prtsub/prt/transfer.h"
+#include "prtsub/subdiv/mesh.h"
+
+namespace prtsub {
+
+struct TopUpStats {
+  size_t vertices = 0;  //!< vertices that got more rays
+  uint64_t rays = 0;
+  double seconds = 0;
+  double variance_before = 0, variance_after = 0;  //!< summed over the vertices (estimated)
+  std::vector<size_t> histogram;  //!< vertices by extra rays: none, then 16·2^(k/4) for k = 0, 1, ...
+};
+
+//! Which vertices get how many more rays: level[i] = k for 16·2^(k/4) rays, -1 for none.
+struct TopUpPlan {
+  std::vector<int> level;
+  size_t vertices = 0;  //!< with a level
+  uint64_t rays = 0;    //!< that the plan will trace
+};
+//! The allocation alone (see top_up_vertices), from each vertex's variance after `rays_done` rays.
+TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget);
+
+//! Traces a plan's rays and merges them into `values` and `variance` (see top_up_vertices).
+TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
+                        const TopUpPlan& plan, RowMatrixXd& values, std::vector<double>& variance, const ProgressFn& progress = {});
+
+//! Traces up to `budget` more rays from the render vertices of `mesh` and merges them into
+//! `values` (#V by K) and `variance` (#V, as shadowed_transfer estimates it), each vertex
+//! weighted by its ray count. The first round traced `rays_done` rays at every vertex. The extra
+//! rays minimise the summed variance for the budget (water-filling on each vertex's estimated
+//! per-ray standard deviation), rounded to 16·2^(k/4) and at most 16× `rays_done`; an open
+//! vertex (variance 0: the estimator is exact there) gets none.
+//! `options` gives order, seed and threads; the result does not depend on threads.
+//! \throw InputError for shapes that do not match the mesh
+TopUpStats top_up_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
+                           uint64_t budget, RowMatrixXd& values, std::vector<double>& variance, const ProgressFn& progress = {});
+
+}  // namespace prtsub

@@ -1,0 +1,124 @@
+#include "prtsub/prt/sample_plan.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "helpers.h"
+#include "prtsub/subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+// An 8×8 ground grid facing up, optionally under a half-plane at height 0.15 over x > 0.45:
+// the transfer changes fastest under the occluder's edge, over a width like the cell size.
+struct Ground {
+  Mesh mesh, world;  // the ground, and the ground with its occluder
+  RayScene scene;
+  RowMatrixXd prior;
+  std::vector<double> variance;
+  explicit Ground(bool occluded, int rays = 256)
+      : mesh(test::build(test::grid(8, 0.3))),
+        world(occluded ? test::build(test::merge(test::grid(8, 0.3), test::quad(50, 0.15, false, 0.45))) : mesh),
+        scene(world.positions, position_triangles(world)) {
+    TransferOptions o;
+    o.rays = rays;
+    const RowMatrixX3d offsets = vertex_offset_directions(mesh);
+    prior = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, o, nullptr, {}, &offsets, &variance);
+  }
+};
+
+TransferOptions pilot_rays(int threads = 0) {
+  TransferOptions o;
+  o.seed = 11, o.threads = threads;
+  return o;
+}
+
+SamplePlan plan(const Ground& g, const PilotOptions& o = {}, int threads = 0) {
+  return plan_samples(g.mesh, g.scene, make_pilot_samples(g.mesh, o, 5), g.prior, g.variance, pilot_rays(threads), o);
+}
+
+TEST(SamplePlan, AnOpenPlaneNeedsNoSamples) {
+  // Every point sees the whole hemisphere: the transfer is exact everywhere (the control
+  // variate), so interpolation reproduces it and no face may be sampled.
+  const Ground g(false);
+  const SamplePlan p = plan(g);
+  EXPECT_EQ(p.sampled_faces, 0u);
+  EXPECT_EQ(*std::max_element(p.face_weight.begin(), p.face_weight.end()), 0.0);
+  EXPECT_GE(p.pilot_samples, PilotOptions{}.min_samples);
+  EXPECT_EQ(p.rays, uint64_t(PilotOptions{}.rays) * p.pilot_samples);
+}
+
+TEST(SamplePlan, FacesWhereInterpolationFailsAreSampledTheOthersNot) {
+  const Ground g(true);
+  const SamplePlan p = plan(g);
+  // The truth, independently: each face's interpolation error at its centroid, from 8192-ray
+  // transfer at the centroid and at the corners.
+  const Mesh& m = g.mesh;
+  const size_t F = m.num_faces();
+  RowMatrixX3d centroid(Eigen::Index(F), 3), normal(Eigen::Index(F), 3);
+  for (size_t f = 0; f < F; ++f) {
+    const Triangle& t = m.triangles[f];
+    centroid.row(Eigen::Index(f)) = ((m.point(t[0]) + m.point(t[1]) + m.point(t[2])) / 3).transpose();
+    normal.row(Eigen::Index(f)) << 0, 0, 1;
+  }
+  TransferOptions ref;
+  ref.rays = 8192, ref.seed = 99;
+  const RowMatrixX3d offsets = vertex_offset_directions(m);
+  const RowMatrixXd at_corners = shadowed_transfer(g.scene, vertex_positions(m), m.normals, ref, nullptr, {}, &offsets);
+  const RowMatrixXd at_centroids = shadowed_transfer(g.scene, centroid, normal, ref);
+  std::vector<double> error(F);
+  for (size_t f = 0; f < F; ++f) {
+    const Triangle& t = m.triangles[f];
+    error[f] = (at_centroids.row(Eigen::Index(f)) - (at_corners.row(t[0]) + at_corners.row(t[1]) + at_corners.row(t[2])) / 3).norm();
+  }
+  std::vector<double> sorted = error;
+  std::sort(sorted.begin(), sorted.end());
+  const double top = sorted[F * 9 / 10], low = sorted[F / 4];
+  size_t low_sampled = 0, low_count = 0;
+  for (size_t f = 0; f < F; ++f) {
+    if (error[f] >= top) {
+      EXPECT_GT(p.face_weight[f], 0.0) << "face " << f << " error " << error[f];
+    }
+    if (error[f] <= low) low_count++, low_sampled += p.face_weight[f] > 0;
+  }
+  // The quarter that interpolation reproduces best is mostly left to it, and the plan does
+  // leave faces out (the test is not passed by sampling everything).
+  EXPECT_LE(low_sampled, low_count / 4) << low_sampled << " of " << low_count;
+  EXPECT_LT(p.sampled_faces, F * 3 / 4);
+  EXPECT_GT(p.sampled_faces, F / 10);
+  // Among the sampled faces, the density follows the error: the worst decile's mean weight
+  // is above the mean weight of the others.
+  double top_w = 0, rest_w = 0;
+  size_t top_n = 0, rest_n = 0;
+  for (size_t f = 0; f < F; ++f) {
+    if (p.face_weight[f] == 0) continue;
+    if (error[f] >= top) top_w += p.face_weight[f], ++top_n;
+    else rest_w += p.face_weight[f], ++rest_n;
+  }
+  ASSERT_GT(top_n * rest_n, 0u);
+  EXPECT_GT(top_w / double(top_n), 1.2 * rest_w / double(rest_n));
+}
+
+TEST(SamplePlan, TheSameForAnyThreadCountAndRejectsWhatItCannotUse) {
+  const Ground g(true);
+  const SamplePlan one = plan(g, {}, 1);
+  const SamplePlan two = plan(g, {}, 2);
+  EXPECT_EQ(one.face_weight, two.face_weight);
+  PilotOptions single;
+  single.rays = 1;  // no variance from one ray
+  EXPECT_THROW(plan(g, single), InputError);
+  EXPECT_THROW(plan_samples(g.mesh, g.scene, make_pilot_samples(g.mesh, {}, 5), g.prior.topRows(3), g.variance, pilot_rays(), {}),
+               InputError);
+  PilotOptions bad;
+  bad.area_share = 2;
+  EXPECT_THROW(plan(g, bad), InputError);
+  bad = PilotOptions{};
+  bad.per_triangle = 0;
+  EXPECT_THROW(plan(g, bad), InputError);
+  EXPECT_EQ(parse_sample_allocation("pilot"), SampleAllocation::Pilot);
+  EXPECT_THROW(parse_sample_allocation("everywhere"), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub

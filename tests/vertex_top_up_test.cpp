@@ -1,0 +1,92 @@
+#include "prtsub/prt/vertex_top_up.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "helpers.h"
+#include "prtsub/subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+int rays_at(int level) { return level < 0 ? 0 : int(std::lround(16 * std::exp2(level / 4.0))); }
+
+TEST(TopUp, WaterFillingGivesOpenVerticesNothingAndTheNoisiestTheMost) {
+  // Per-ray variances c = R·v; the optimum is R + e = λ√c where that exceeds R.
+  const int R = 64;
+  const std::vector<double> v = {0, 0, 1e-6, 0.01, 0.04, 0.16, 0.64, 2.56, INFINITY, NAN};
+  const uint64_t budget = 700;  // λ ≈ 40: the three noisiest get rays, none reaches the cap
+  const TopUpPlan plan = plan_top_up(v, R, budget);
+  ASSERT_EQ(plan.level.size(), v.size());
+  EXPECT_EQ(plan.level[0], -1);  // exact: nothing to gain
+  EXPECT_EQ(plan.level[1], -1);
+  EXPECT_EQ(plan.level[8], -1);  // unknown variances are not guessed at
+  EXPECT_EQ(plan.level[9], -1);
+  EXPECT_EQ(plan.level[2], -1);  // far below the water line
+  for (size_t i = 3; i + 1 < 8; ++i) EXPECT_LE(plan.level[i], plan.level[i + 1]) << i;
+  uint64_t total = 0;
+  for (int l : plan.level) total += uint64_t(rays_at(l));
+  EXPECT_EQ(total, plan.rays);
+  EXPECT_GT(double(total), 0.8 * budget);  // rounding to 2^(1/4) steps moves each count by at most 9%
+  EXPECT_LT(double(total), 1.2 * budget);
+  // The optimum's shape: where both get rays, R + e grows as √c, so each 4× in variance doubles
+  // R + e (to the rounding of the levels, 2^(1/8) each way).
+  EXPECT_EQ(plan.level[4], -1);
+  ASSERT_GE(plan.level[5], 0);
+  for (size_t i = 6; i < 8; ++i) {
+    const double ratio = double(R + rays_at(plan.level[i])) / double(R + rays_at(plan.level[i - 1]));
+    EXPECT_NEAR(std::log2(ratio), 1.0, 0.3) << i;
+  }
+  EXPECT_EQ(plan_top_up(v, R, 0).vertices, 0u);   // no budget
+  EXPECT_EQ(plan_top_up(v, 1, budget).vertices, 0u);  // one ray: no variance to go by
+  // At most 16× the first round each, however large the budget.
+  for (int l : plan_top_up(v, R, 1000000000).level) EXPECT_LE(rays_at(l), int(16 * R * 1.1));
+}
+
+TEST(TopUp, MoreRaysWhereTheyCountAndTheSameForAnyThreadCount) {
+  // A ground grid under a half-plane: vertices in the open see the whole sky (exact), those
+  // under the edge are noisy. The second round must lower the summed error against a
+  // high-ray reference, spend nothing in the open, and not depend on threads.
+  const Mesh ground = test::build(test::grid(10, 0.3));
+  const Mesh world = test::build(test::merge(test::grid(10, 0.3), test::quad(50, 0.2, false, 0.6)));
+  const RayScene scene(world.positions, position_triangles(world));
+  const RowMatrixX3d offsets = vertex_offset_directions(ground);
+  TransferOptions o;
+  o.rays = 32;
+  std::vector<double> variance;
+  const RowMatrixXd first = shadowed_transfer(scene, vertex_positions(ground), ground.normals, o, nullptr, {}, &offsets, &variance);
+  TransferOptions ref = o;
+  ref.rays = 16384, ref.seed = 77;
+  const RowMatrixXd truth = shadowed_transfer(scene, vertex_positions(ground), ground.normals, ref, nullptr, {}, &offsets);
+  const TopUpPlan plan = plan_top_up(variance, o.rays, 32 * ground.num_vertices());
+  for (size_t i = 0; i < variance.size(); ++i)
+    if (variance[i] == 0) {
+      EXPECT_EQ(plan.level[i], -1) << i;
+    }
+  EXPECT_GT(plan.vertices, 0u);
+  RowMatrixXd x1 = first, x2 = first;
+  std::vector<double> v1 = variance, v2 = variance;
+  TransferOptions one = o, two = o;
+  one.threads = 1, two.threads = 2;
+  const TopUpStats s1 = apply_top_up(ground, scene, one, o.rays, plan, x1, v1);
+  apply_top_up(ground, scene, two, o.rays, plan, x2, v2);
+  EXPECT_EQ(x1, x2);
+  EXPECT_EQ(v1, v2);
+  EXPECT_EQ(s1.rays, plan.rays);
+  EXPECT_LT(s1.variance_after, 0.7 * s1.variance_before);
+  const double before = (first - truth).squaredNorm(), after = (x1 - truth).squaredNorm();
+  // The expected squared errors are the summed variances; the measured ones follow them.
+  EXPECT_LT(after, before);
+  EXPECT_NEAR(after / before, s1.variance_after / s1.variance_before, 0.5 * s1.variance_after / s1.variance_before + 0.1);
+  // Open vertices are untouched.
+  for (size_t i = 0; i < variance.size(); ++i)
+    if (variance[i] == 0) {
+      EXPECT_EQ(x1.row(Eigen::Index(i)), first.row(Eigen::Index(i)));
+    }
+  std::vector<double> short_variance(3, 1.0);
+  EXPECT_THROW(apply_top_up(ground, scene, o, o.rays, plan, x1, short_variance), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub
