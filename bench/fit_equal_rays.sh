@@ -14,10 +14,10 @@ for scene in "$@"; do
   name=${scene%.*}
   for signal in transfer ao; do
     a="$out/${name}_${signal}_default.json" b="$out/${name}_${signal}_point.json"
-    "$build/prtsub" eval --fits "$scenes/$scene" --signal "$signal" --reference-rays 2048 --report "$a" > /dev/null
+    "$build/prtsub" eval --fits "$scenes/$scene" --signal "$signal" --reference-rays 2048 --sample-allocation area --report "$a" > /dev/null
     rays=$(python3 -c "import json; r=json.load(open('$a')); print(256 + round(16 * r['samples'] / r['vertices']))")
     "$build/prtsub" eval --fits "$scenes/$scene" --signal "$signal" --rays "$rays" --reference-rays 2048 \
-      --samples-per-triangle 1 --report "$b" > /dev/null
+      --samples-per-triangle 1 --sample-allocation area --report "$b" > /dev/null
     python3 -c "
 import json; a=json.load(open('$a')); b=json.load(open('$b'))
 print('| $name | $signal | %.3f | %.3f | $rays | %.3f |' % (a['e_default_percent'], a['e_point_percent'], b['e_point_percent']))"

@@ -11,7 +11,7 @@ for scene in "$scenes/cornell_box.obj" "$scenes/house_on_site.obj" "$gen/spot_on
     for mass in analytic sampled plain; do
       opts="--mass $mass"
       [ "$mass" = plain ] && opts="--mass analytic --no-control-variate"
-      "$build/prtsub" eval --fits "$scene" --samples-per-triangle $n $opts --points 10000 \
+      "$build/prtsub" eval --fits "$scene" --sample-allocation area --samples-per-triangle $n $opts --points 10000 \
         --report "$out/${name}_${n}_${mass}.json" > /dev/null 2>&1
       python3 -c "import json,sys; r=json.load(open('$out/${name}_${n}_${mass}.json')); print('$name', $n, '$mass', '%.3f %.3f %.3f' % (r['e_avg_percent'], r['e_lsq_percent'], r['e_alpha_percent']))"
     done

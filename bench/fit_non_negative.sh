@@ -14,7 +14,7 @@ for scene in cornell_box.obj house_on_site.obj spot_control_mesh.obj sibenik.obj
   for signal in transfer ao; do
     row="| $name | $signal"
     for mode in off constant directions; do
-      "$build/prtsub" eval --fits "$scenes/$scene" --signal "$signal" --non-negative "$mode" --report "$out/${name}_${signal}_$mode.json" > /dev/null
+      "$build/prtsub" eval --fits "$scenes/$scene" --signal "$signal" --sample-allocation area --non-negative "$mode" --report "$out/${name}_${signal}_$mode.json" > /dev/null
       row="$row | $(python3 -c "import json; r=json.load(open('$out/${name}_${signal}_$mode.json')); print('%.3f' % r['e_default_percent'] + ('' if '$mode' == 'off' else ' | %d' % r['limited_vertices']))")"
     done
     echo "$row |"
