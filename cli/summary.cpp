@@ -55,6 +55,12 @@ void record_sample_spread(Report& r, const FitData& data) {
   r.set("interpolated_faces", F - data.plan.sampled_faces);
 }
 
+void record(Report& r, const ErrorEstimate& e) {
+  r.set("predicted_error_percent", e.percent);
+  r.set("predicted_error_standard_error", e.standard_error);
+  r.set("predicted_error_samples", e.samples);
+}
+
 void record(Report& r, const TopUpStats& t) {
   r.set("top_up_vertices", t.vertices);
   r.set("top_up_rays", t.rays);
@@ -118,7 +124,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
-  if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up);
+  if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
   if (o.signal == AssetSignal::Ao) r.set("clamped_values", res.clamped);
   const double trace_seconds = res.seconds_transfer + res.refine.seconds_signal + res.seconds_samples + res.seconds_top_up;
   r.set("rays", res.rays);
@@ -185,6 +191,9 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"              weighed by noise: {kept_correction:%1} of the fit's correction kept on average; non-negative "
                      "({non_negative}): {non_negative_limited_vertices} vertices limited"});
   }
+  if (r.has("predicted_error_percent"))
+    r.print(stdout, {"  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
+                     "on {predicted_error_samples} held-out pilot samples: what prtsub eval should find"});
   r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)",
                    "  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "
                    "{seconds_transfer:3}, refine {seconds_refine:3}, samples {seconds_samples:3}, vertex rays {seconds_top_up:3}, fit {seconds_fit:3}, write "

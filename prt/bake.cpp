@@ -12,6 +12,7 @@
 #include "prtsub/prt/bake.h"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sampling.h"
@@ -133,6 +134,10 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"samples", std::to_string(r.fit_data.samples.size())});
     m.push_back({"sample_allocation", sample_allocation_name(r.fit_data.allocation)});
     if (r.fit_data.allocation == SampleAllocation::Pilot) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%.3f%% +- %.3f%% (eval's unit, on %zu held-out pilot samples)", r.predicted.percent,
+                    r.predicted.standard_error, r.predicted.samples);
+      m.push_back({"predicted_error", buf});
       m.push_back({"pilot_samples", std::to_string(r.fit_data.plan.pilot_samples) + " (" + std::to_string(o.pilot.rays) + " rays each)"});
       m.push_back({"sampled_faces", std::to_string(r.fit_data.plan.sampled_faces)});
       m.push_back({"extra_vertex_rays", std::to_string(r.top_up.rays) + " at " + std::to_string(r.top_up.vertices) + " vertices"});
@@ -258,6 +263,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     r.clamped = clamp_ao(r.transfer);
     clamp_ao(r.point);
   }
+  if (r.fit_data.allocation == SampleAllocation::Pilot) r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, r.transfer);
   r.seconds_total = clock.total();
   r.metadata = bake_metadata(o, r);
   return r;

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/error_estimate.h"
 #include "prtsub/prt/fit.h"
 #include "prtsub/prt/refine_signal.h"
 #include "prtsub/prt/sample_plan.h"
@@ -80,6 +81,9 @@ struct BakeResult {
   RefineStats refine;    //!< adaptive refinement's counts and times
   FitData fit_data;      //!< the samples (empty when fit is point)
   TopUpStats top_up;     //!< the second round of vertex rays (Pilot allocation)
+  //! Pilot allocation: the asset's error measured on the pilot's held-out samples (what eval
+  //! would report; all 0 otherwise)
+  ErrorEstimate predicted;
   FitStats fit;
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
   uint64_t rays = 0;     //!< every transfer ray traced

@@ -74,12 +74,25 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   for (size_t k = 0; k < S; k += 64) group_begin.push_back(k);
   group_begin.push_back(S);
   TransferStats stats;
+  SamplePlan plan;
+  const size_t stride = o.holdout > 0 ? std::max<size_t>(1, (S + o.holdout - 1) / o.holdout) : 0;
+  Holdout& held = plan.holdout;
+  const size_t n_held = stride > 0 ? (S + stride - 1) / stride : 0;
+  held.face.resize(n_held), held.weight.resize(n_held), held.variance.resize(n_held);
+  held.barycentric.resize(static_cast<Eigen::Index>(n_held), 3);
+  held.values.resize(static_cast<Eigen::Index>(n_held), K);
   shadowed_transfer_groups(
       scene, pilot.points, pilot.normals, group_begin, to,
       [&](size_t g, const double* values, const double* variance, size_t rows) {
         Eigen::VectorXd r(K);
         for (size_t j = 0; j < rows; ++j) {
           const size_t k = group_begin[g] + j;
+          if (stride > 0 && k % stride == 0) {  // rows of distinct samples: no two threads share one
+            const auto h = static_cast<Eigen::Index>(k / stride);
+            held.face[size_t(h)] = pilot.face[k], held.weight[size_t(h)] = pilot.weight[k], held.variance[size_t(h)] = variance[j];
+            held.barycentric.row(h) = pilot.barycentric.row(static_cast<Eigen::Index>(k));
+            for (Eigen::Index q = 0; q < K; ++q) held.values(h, q) = static_cast<float>(values[j * size_t(K) + size_t(q)]);
+          }
           const Triangle& t = mesh.triangles[pilot.face[k]];
           double v = variance[j];
           for (Eigen::Index q = 0; q < K; ++q) r[q] = values[j * size_t(K) + size_t(q)];
@@ -124,7 +137,6 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     for (size_t f = 0; f < F; ++f)
       for (int c = 0; c < 3; ++c) vf[fill[mesh.triangles[f][c]]++] = f;
   }
-  SamplePlan plan;
   plan.face_weight.assign(F, 0.0);
   std::vector<double> raw(F, 0.0), area(F, 0.0);
   std::vector<size_t> face_mark(F, SIZE_MAX), vertex_mark(V, SIZE_MAX), ring, next;

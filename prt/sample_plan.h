@@ -37,6 +37,20 @@ struct PilotOptions {
   //! share of a face's sample density that follows its area alone; the rest follows its
   //! estimated interpolation error (a floor against a pilot that missed a shadow)
   double area_share = 0.5;
+  //! pilot samples kept with their values as a hold-out set (every ⌈S / holdout⌉-th)
+  size_t holdout = 262144;
+};
+
+//! A systematic subset of the pilot's samples, kept with their traced values: a hold-out set,
+//! independent of the vertex and sample rays, on which the finished asset's error can be
+//! measured (holdout_error in error_estimate.h).
+struct Holdout {
+  std::vector<uint32_t> face;
+  RowMatrixX3d barycentric;     //!< n by 3
+  std::vector<double> weight;   //!< each sample's area weight (its face's area over its count)
+  std::vector<double> variance;  //!< each value's estimated variance, summed over its K values
+  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values;  //!< n by K
+  size_t size() const { return face.size(); }
 };
 
 //! What the pilot found: per-face sample weights for make_surface_samples, and figures.
@@ -45,6 +59,7 @@ struct SamplePlan {
   size_t pilot_samples = 0;
   size_t sampled_faces = 0;         //!< faces with a positive weight
   double sampled_area = 0;          //!< their area
+  Holdout holdout;                  //!< at most PilotOptions::holdout of the pilot samples
   uint64_t rays = 0;
   double seconds = 0;
 };

@@ -63,6 +63,10 @@ TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
   EXPECT_GT(r.top_up.rays, 0u);
   EXPECT_LT(r.top_up.variance_after, r.top_up.variance_before);
   EXPECT_GT(r.fit_data.plan.sampled_faces, 0u);
+  // Its held-out samples measure the finished asset's error.
+  EXPECT_EQ(r.predicted.samples, r.fit_data.plan.holdout.size());
+  EXPECT_GT(r.predicted.samples, 0u);
+  EXPECT_GT(r.predicted.percent, 0.0);
   EXPECT_EQ(r.fit_data.plan.rays, uint64_t(o.pilot.rays) * r.fit_data.plan.pilot_samples);
   EXPECT_EQ(r.rays, uint64_t(16) * mesh.num_vertices() + r.fit_data.plan.rays + uint64_t(4) * r.fit_data.samples.size() + r.top_up.rays);
   std::map<std::string, std::string> meta(r.metadata.begin(), r.metadata.end());

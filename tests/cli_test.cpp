@@ -55,6 +55,8 @@ TEST_F(Cli, BakeWritesAnAssetAndAReportWithTheDocumentedKeys) {
   for (const char* bin : {"0", "1", "2_3", "4_7", "8_15", "16_31", "32_63", "64_up"}) faces += number(std::string("faces_with_samples_") + bin);
   EXPECT_EQ(faces, 82);
   EXPECT_EQ(number("faces_with_samples_0"), number("interpolated_faces"));
+  EXPECT_GT(number("predicted_error_percent"), 0);
+  EXPECT_GT(number("predicted_error_samples"), 0);
   EXPECT_NE(json.find("\"fit\": \"lsq\""), std::string::npos);
   EXPECT_EQ(run({"inspect", out}), 0);
   EXPECT_EQ(run({"inspect", out, "--report", dir.path("i.json")}), 0);

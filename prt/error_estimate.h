@@ -1,0 +1,22 @@
+// The bake's own measure of its asset's error: what `prtsub eval` would report, without a
+// reference, from samples held out of every estimate the asset was built from.
+#pragma once
+
+#include "prtsub/prt/sample_plan.h"
+
+namespace prtsub {
+
+struct ErrorEstimate {
+  double percent = 0;         //!< the surface RMS of ‖f − g‖, in % of ‖t_unshadowed‖ (eval's unit)
+  double standard_error = 0;  //!< of `percent`, from the spread of the samples' terms
+  size_t samples = 0;
+};
+
+//! E² = Σ_k w_k (‖f̂_k − g(p_k)‖² − v_k) / Σ_k w_k over the hold-out samples k: f̂_k their traced
+//! values, v_k their variances, g the asset's interpolated values. Each term is an unbiased
+//! estimate of ‖f − g‖² at p_k, as long as f̂_k's rays are independent of those g was made from.
+//! \param values #V by K, the asset's vertex values (order-1 transfer for AO)
+//! \throw InputError for shapes that do not match
+ErrorEstimate holdout_error(const Mesh& mesh, const Holdout& holdout, const RowMatrixXd& values);
+
+}  // namespace prtsub

@@ -1,0 +1,111 @@
+#include "prtsub/prt/error_estimate.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "helpers.h"
+#include "prtsub/prt/evaluate.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/random.h"
+
+namespace prtsub {
+namespace {
+
+// A hold-out set on a jittered grid: n samples spread by area (the pilot's), with "traced"
+// values f(p) plus seeded Gaussian noise of variance `noise` (summed over K = 4 values),
+// which the set also reports.
+struct HeldOut {
+  Mesh mesh = test::build(test::grid(6, 0.5));
+  Holdout h;
+  HeldOut(const std::function<Eigen::Vector4d(const Eigen::Vector3d&)>& f, double noise, size_t per_face) {
+    Rng rng(17, 0);
+    for (uint32_t face = 0; face < mesh.num_faces(); ++face) {
+      const Triangle& t = mesh.triangles[face];
+      const double area = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
+      for (size_t k = 0; k < per_face; ++k) {
+        double u = rng.uniform(), v = rng.uniform();
+        if (u + v > 1) u = 1 - u, v = 1 - v;
+        const Eigen::Vector3d b(1 - u - v, u, v);
+        const Eigen::Vector3d p = b[0] * mesh.point(t[0]) + b[1] * mesh.point(t[1]) + b[2] * mesh.point(t[2]);
+        Eigen::Vector4d value = f(p);
+        for (int q = 0; q < 4; ++q) {  // Box–Muller
+          const double g = std::sqrt(-2 * std::log(1 - rng.uniform())) * std::cos(2 * M_PI * rng.uniform());
+          value[q] += std::sqrt(noise / 4) * g;
+        }
+        h.face.push_back(face), h.weight.push_back(area / double(per_face)), h.variance.push_back(noise);
+        h.barycentric.conservativeResize(h.barycentric.rows() + 1, 3);
+        h.barycentric.bottomRows(1) = b.transpose();
+        h.values.conservativeResize(h.values.rows() + 1, 4);
+        h.values.bottomRows(1) = value.transpose().cast<float>();
+      }
+    }
+  }
+};
+
+Eigen::Vector4d linear(const Eigen::Vector3d& p) { return Eigen::Vector4d(0.9, 0.3 * p.x(), -0.2 * p.y(), 0.1); }
+
+RowMatrixXd at_vertices(const Mesh& m, const std::function<Eigen::Vector4d(const Eigen::Vector3d&)>& f) {
+  RowMatrixXd x(Eigen::Index(m.num_vertices()), 4);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) x.row(i) = f(m.point(i)).transpose();
+  return x;
+}
+
+TEST(HoldoutError, ExactValuesHaveNoErrorAndAnOffsetIsMeasuredExactly) {
+  const HeldOut s(linear, 0.0, 20);
+  const RowMatrixXd exact = at_vertices(s.mesh, linear);
+  const ErrorEstimate zero = holdout_error(s.mesh, s.h, exact);
+  EXPECT_NEAR(zero.percent, 0.0, 1e-4);  // float storage of the values
+  EXPECT_EQ(zero.samples, s.h.size());
+  // Every vertex off by δ in each of 4 values: ‖f − g‖ = 2δ everywhere, in units of ‖t_unshadowed‖ (order 2).
+  RowMatrixXd off = exact;
+  off.array() += 0.01;
+  EXPECT_NEAR(holdout_error(s.mesh, s.h, off).percent, 100 * 0.02 / unshadowed_norm(2), 1e-4);
+}
+
+TEST(HoldoutError, NoiseInTheHeldOutValuesIsRemovedAndInterpolationErrorIsNot) {
+  // A quadratic signal interpolated linearly: the true error from an independent quadrature of
+  // the interpolation error; the held-out values carry noise 25× its square, which the
+  // estimate must take out to within its own standard error.
+  const auto quad = [](const Eigen::Vector3d& p) {
+    return Eigen::Vector4d(0.9 + 3 * p.x() * p.x(), 0.3 * p.x(), -2 * p.y() * p.y(), 0.1 + p.x() * p.y());
+  };
+  const double noise = 0.01;
+  const HeldOut s(quad, noise, 400);
+  const RowMatrixXd x = at_vertices(s.mesh, quad);
+  // Truth: the area-weighted mean of ‖f − g‖² on a fine midpoint rule per face.
+  double truth = 0, area = 0;
+  const int n = 40;
+  for (const Triangle& t : s.mesh.triangles) {
+    const double a = triangle_area(s.mesh.point(t[0]), s.mesh.point(t[1]), s.mesh.point(t[2]));
+    double sum = 0;
+    int count = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        const Eigen::Vector3d b((i + 1.0 / 3) / n, (j + 1.0 / 3) / n, 1 - (i + j + 2.0 / 3) / n);
+        const Eigen::Vector3d p = b[0] * s.mesh.point(t[0]) + b[1] * s.mesh.point(t[1]) + b[2] * s.mesh.point(t[2]);
+        const Eigen::Vector4d g = b[0] * x.row(t[0]).transpose() + b[1] * x.row(t[1]).transpose() + b[2] * x.row(t[2]).transpose();
+        sum += (quad(p) - g).squaredNorm(), ++count;
+      }
+    truth += a * sum / count, area += a;
+  }
+  const double truth_percent = 100 * std::sqrt(truth / area) / unshadowed_norm(2);
+  ASSERT_LT(truth / area, noise / 10);  // the noise dwarfs what is measured
+  const ErrorEstimate e = holdout_error(s.mesh, s.h, x);
+  EXPECT_GT(e.standard_error, 0.0);
+  EXPECT_NEAR(e.percent, truth_percent, 4 * e.standard_error) << "truth " << truth_percent;
+  EXPECT_LT(e.standard_error, 0.2 * truth_percent);  // and the test has teeth
+  // Without the noise taken out it would be far off: the raw mean square is noise-dominated.
+  EXPECT_GT(100 * std::sqrt(noise) / unshadowed_norm(2), 3 * truth_percent);
+}
+
+TEST(HoldoutError, EmptyOrMismatchedSets) {
+  const HeldOut s(linear, 0.0, 2);
+  EXPECT_EQ(holdout_error(s.mesh, Holdout{}, at_vertices(s.mesh, linear)).samples, 0u);
+  EXPECT_THROW(holdout_error(s.mesh, s.h, RowMatrixXd::Zero(3, 4)), InputError);
+  EXPECT_THROW(holdout_error(s.mesh, s.h, RowMatrixXd::Zero(Eigen::Index(s.mesh.num_vertices()), 9)), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub
