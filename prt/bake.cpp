@@ -186,7 +186,8 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
     const double area_rays = (o.samples.density > 0 ? o.samples.density * surface_area(r.mesh) : o.samples.per_triangle * double(r.mesh.num_faces())) *
                              o.sample_rays;
     const double saved = std::max(0.0, area_rays - static_cast<double>(r.fit_data.rays));
-    const TopUpPlan plan = plan_top_up(r.point_variance, o.transfer.rays, static_cast<uint64_t>(o.vertex_share * saved));
+    const TopUpPlan plan =
+        plan_top_up(r.point_variance, o.transfer.rays, static_cast<uint64_t>(o.vertex_share * saved), vertex_areas(r.mesh));
     if (progress.stage) progress.stage("vertex rays", plan.vertices);
     r.top_up = apply_top_up(r.mesh, scene, o.transfer, o.transfer.rays, plan, r.transfer, r.point_variance, progress.add);
     r.rays += r.top_up.rays;

@@ -1,5 +1,8 @@
 // A second round of vertex rays, spent by noise (issue 11: rays per vertex are chosen, not fixed).
 //
+// The error to lower is the surface's, so vertex i's variance counts with the area w_i it
+// interpolates over (a third of its faces'): minimise Σ w_i c_i/(R + e_i), giving R + e_i = λ√(w_i c_i).
+//
 // After the first round every vertex has an estimate x_i from R rays and its variance v_i (from
 // the estimator's two independent halves), so its per-ray variance is c_i = R·v_i. With e_i more
 // rays the merged estimate (R·x_i + e_i·x'_i)/(R + e_i) has variance c_i/(R + e_i); the e_i ≥ 0
@@ -26,14 +29,17 @@ constexpr int kLevels = 48;  // 16·2^(k/4) rays: 16 to about 64k
 int level_rays(int k) { return static_cast<int>(std::lround(16 * std::exp2(k / 4.0))); }
 }  // namespace
 
-TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget) {
+TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget, const std::vector<double>& weight) {
   const size_t V = variance.size();
+  if (!weight.empty() && weight.size() != V) throw InputError("top-up: one weight per vertex expected");
   TopUpPlan plan;
   plan.level.assign(V, -1);
   std::vector<double> spread(V, 0.0);  // √c_i, the per-ray standard deviation
   double total = 0;
   for (size_t i = 0; i < V; ++i) {
-    if (rays_done >= 2 && std::isfinite(variance[i]) && variance[i] > 0) spread[i] = std::sqrt(variance[i] * rays_done);
+    const double w = weight.empty() ? 1.0 : weight[i];
+    if (rays_done >= 2 && std::isfinite(variance[i]) && variance[i] > 0 && w > 0 && std::isfinite(w))
+      spread[i] = std::sqrt(w * variance[i] * rays_done);
     total += spread[i];
   }
   if (!(total > 0) || budget == 0 || rays_done < 2) return plan;
@@ -111,10 +117,21 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
   return stats;
 }
 
+std::vector<double> vertex_areas(const Mesh& mesh) {
+  std::vector<double> a(mesh.num_vertices(), 0.0);
+  for (const Triangle& t : mesh.triangles) {
+    const double area = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
+    if (std::isfinite(area))
+      for (int c = 0; c < 3; ++c) a[t[c]] += area / 3;
+  }
+  return a;
+}
+
 TopUpStats top_up_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
                            uint64_t budget, RowMatrixXd& values, std::vector<double>& variance, const ProgressFn& progress) {
   if (variance.size() != mesh.num_vertices()) throw InputError("top-up: values and variances need one row per vertex");
-  return apply_top_up(mesh, scene, options, rays_done, plan_top_up(variance, rays_done, budget), values, variance, progress);
+  return apply_top_up(mesh, scene, options, rays_done, plan_top_up(variance, rays_done, budget, vertex_areas(mesh)), values, variance,
+                      progress);
 }
 
 }  // namespace prtsub

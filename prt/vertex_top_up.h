@@ -24,7 +24,13 @@ struct TopUpPlan {
   uint64_t rays = 0;    //!< that the plan will trace
 };
 //! The allocation alone (see top_up_vertices), from each vertex's variance after `rays_done` rays.
-TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget);
+//! \param weight #V or empty: how much each vertex's variance counts (the area it interpolates
+//!        over, for an error measured over the surface); empty counts them equally
+TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget,
+                      const std::vector<double>& weight = {});
+
+//! A third of the area of the faces around each vertex: the weights for a surface error.
+std::vector<double> vertex_areas(const Mesh& mesh);
 
 //! Traces a plan's rays and merges them into `values` and `variance` (see top_up_vertices).
 TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
@@ -33,8 +39,9 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
 //! Traces up to `budget` more rays from the render vertices of `mesh` and merges them into
 //! `values` (#V by K) and `variance` (#V, as shadowed_transfer estimates it), each vertex
 //! weighted by its ray count. The first round traced `rays_done` rays at every vertex. The extra
-//! rays minimise the summed variance for the budget (water-filling on each vertex's estimated
-//! per-ray standard deviation), rounded to 16·2^(k/4) and at most 16× `rays_done`; an open
+//! rays minimise the summed variance, each vertex's weighted by the area around it (the surface
+//! error eval measures), for the budget (water-filling on each vertex's estimated per-ray
+//! standard deviation), rounded to 16·2^(k/4) and at most 16× `rays_done`; an open
 //! vertex (variance 0: the estimator is exact there) gets none.
 //! `options` gives order, seed and threads; the result does not depend on threads.
 //! \throw InputError for shapes that do not match the mesh

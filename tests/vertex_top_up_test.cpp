@@ -38,6 +38,13 @@ TEST(TopUp, WaterFillingGivesOpenVerticesNothingAndTheNoisiestTheMost) {
     const double ratio = double(R + rays_at(plan.level[i])) / double(R + rays_at(plan.level[i - 1]));
     EXPECT_NEAR(std::log2(ratio), 1.0, 0.3) << i;
   }
+  // Weights (the area a vertex interpolates over) count like variance: 4× the weight at equal
+  // variance doubles R + e, and a weight of 0 gets nothing.
+  const TopUpPlan weighted = plan_top_up({0.1, 0.1, 0.1}, R, 600, {1.0, 4.0, 0.0});
+  ASSERT_GE(weighted.level[0], 0);
+  EXPECT_NEAR(std::log2(double(R + rays_at(weighted.level[1])) / double(R + rays_at(weighted.level[0]))), 1.0, 0.3);
+  EXPECT_EQ(weighted.level[2], -1);
+  EXPECT_THROW(plan_top_up(v, R, budget, {1.0}), InputError);
   EXPECT_EQ(plan_top_up(v, R, 0).vertices, 0u);   // no budget
   EXPECT_EQ(plan_top_up(v, 1, budget).vertices, 0u);  // one ray: no variance to go by
   // At most 16× the first round each, however large the budget.
