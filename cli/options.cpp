@@ -60,6 +60,8 @@ void BakeCli::add_fit(ArgParser& args) {
               "the vertex values fails, or every face by area (the paper's)", &bake.allocation,
               {SampleAllocation::Pilot, SampleAllocation::Area}, sample_allocation_name);
   args.option("--pilot-samples", "N", "fit, pilot: pilot samples per triangle", &bake.pilot.per_triangle, 0.01, 1e3);
+  args.option("--error", "E", "fit, pilot: trace more vertex rays until the error measured on the pilot's held-out samples\n"
+              "(eval's percent) is at most E; 0: off", &bake.target_error, 0.0, 1e6);
   args.option("--pilot-vertex-share", "S", "fit, pilot: share of the sample rays the pilot saved that go to the noisiest\n"
               "vertices instead", &bake.vertex_share, 0.0, 1e3);
   args.option("--pilot-rays", "R", "fit, pilot: rays per pilot sample", &bake.pilot.rays, 2, 1 << 20);

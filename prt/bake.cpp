@@ -12,9 +12,12 @@
 #include "prtsub/prt/bake.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
+#include "prtsub/prt/evaluate.h"
 #include "prtsub/prt/ray_scene.h"
+#include "prtsub/subdiv/random.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/vertex_top_up.h"
@@ -42,6 +45,8 @@ void check_bake_options(const BakeOptions& o) {
   if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw InputError("adaptive refinement needs a triangle budget");
   if (o.refine == Refinement::Uniform && (o.uniform.levels < 1 || o.uniform.levels > 8))
     throw InputError("uniform refinement: levels must be between 1 and 8, got " + std::to_string(o.uniform.levels));
+  if (!(o.target_error >= 0) || !std::isfinite(o.target_error))
+    throw InputError("--error must be a finite, non-negative percentage, got " + std::to_string(o.target_error));
   if (!(o.fit.alpha >= 0) || !std::isfinite(o.fit.alpha))
     throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.fit.alpha));
 }
@@ -138,6 +143,9 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
       std::snprintf(buf, sizeof buf, "%.3f%% +- %.3f%% (eval's unit, on %zu held-out pilot samples)", r.predicted.percent,
                     r.predicted.standard_error, r.predicted.samples);
       m.push_back({"predicted_error", buf});
+      if (o.target_error > 0)
+        m.push_back({"target_error", std::to_string(o.target_error) + "% (" + std::to_string(r.target_rays) + " more vertex rays in " +
+                                         std::to_string(r.target_rounds) + " rounds)"});
       m.push_back({"pilot_samples", std::to_string(r.fit_data.plan.pilot_samples) + " (" + std::to_string(o.pilot.rays) + " rays each)"});
       m.push_back({"sampled_faces", std::to_string(r.fit_data.plan.sampled_faces)});
       m.push_back({"extra_vertex_rays", std::to_string(r.top_up.rays) + " at " + std::to_string(r.top_up.vertices) + " vertices"});
@@ -187,9 +195,10 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
                              o.sample_rays;
     const double saved = std::max(0.0, area_rays - static_cast<double>(r.fit_data.rays));
     const TopUpPlan plan =
-        plan_top_up(r.point_variance, o.transfer.rays, static_cast<uint64_t>(o.vertex_share * saved), vertex_areas(r.mesh));
+        plan_top_up(r.point_variance, r.vertex_rays, static_cast<uint64_t>(o.vertex_share * saved), vertex_areas(r.mesh),
+                    17.0 * o.transfer.rays);
     if (progress.stage) progress.stage("vertex rays", plan.vertices);
-    r.top_up = apply_top_up(r.mesh, scene, o.transfer, o.transfer.rays, plan, r.transfer, r.point_variance, progress.add);
+    r.top_up = apply_top_up(r.mesh, scene, o.transfer, plan, r.transfer, r.point_variance, r.vertex_rays, progress.add);
     r.rays += r.top_up.rays;
     r.seconds_top_up = clock.lap();
   }
@@ -197,6 +206,69 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
   r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
+}
+
+// The values as the asset will hold them (AO clamped), for the hold-out error.
+RowMatrixXd asset_values(const BakeOptions& o, const RowMatrixXd& values) {
+  RowMatrixXd v = values;
+  if (o.signal == AssetSignal::Ao) clamp_ao(v);
+  return v;
+}
+
+// --error E: more vertex rays until the hold-out error is at most E. The vertices' noise part of
+// the squared error is N² = Σ_i w_i var_i / 2A (∫_f h_c² = a_f/6, w_i a third of the area around
+// vertex i); the rest of the measured E² is interpolation error, which vertex rays do not lower.
+// If E is above it, each round plans the water-filling budget whose planned noise meets
+// E² − (E_now² − N²), traces it with a seed of its own, fits again and measures again.
+void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
+  if (r.fit_data.allocation != SampleAllocation::Pilot) {
+    r.warnings.push_back("--error needs the pilot's held-out samples to measure the error; ignored with this sample allocation");
+    return;
+  }
+  const std::vector<double> w = vertex_areas(r.mesh);
+  double area = 0;
+  for (double a : w) area += a;
+  const double unit = unshadowed_norm(o.transfer.order) / 100, target2 = std::pow(o.target_error * unit, 2);
+  const double max_rays = 64.0 * o.transfer.rays;
+  for (int round = 1; round <= 4 && r.predicted.percent > o.target_error; ++round) {
+    double noise2 = 0;
+    for (size_t i = 0; i < w.size(); ++i)
+      if (std::isfinite(r.point_variance[i])) noise2 += w[i] * r.point_variance[i];
+    noise2 /= 2 * std::max(area, 1e-300);
+    const double bias2 = std::max(0.0, std::pow(r.predicted.percent * unit, 2) - noise2);
+    if (target2 <= 1.02 * bias2) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "--error %g: %.3f%% of the error is interpolation, which more vertex rays do not lower; refine "
+                    "(--refine adaptive --budget) or sample more (--pilot-significance)", o.target_error, std::sqrt(bias2) / unit);
+      r.warnings.push_back(buf);
+      break;
+    }
+    const double want = 2 * area * (target2 - bias2);  // Σ w var the noise may have
+    uint64_t lo = 0, hi = 1024;
+    while (hi < (uint64_t(1) << 40) &&
+           planned_variance(plan_top_up(r.point_variance, r.vertex_rays, hi, w, max_rays), r.point_variance, r.vertex_rays, w) > want)
+      hi *= 2;
+    for (int it = 0; it < 30 && hi - lo > 1024; ++it) {
+      const uint64_t mid = lo + (hi - lo) / 2;
+      (planned_variance(plan_top_up(r.point_variance, r.vertex_rays, mid, w, max_rays), r.point_variance, r.vertex_rays, w) > want ? lo
+                                                                                                                                  : hi) = mid;
+    }
+    const TopUpPlan plan = plan_top_up(r.point_variance, r.vertex_rays, hi, w, max_rays);
+    if (plan.rays == 0) break;
+    TransferOptions to = o.transfer;
+    to.seed = mix64(o.transfer.seed + 0xE77ull * uint64_t(round));
+    if (progress.stage) progress.stage("error target", plan.vertices);
+    const TopUpStats st = apply_top_up(r.mesh, scene, to, plan, r.point, r.point_variance, r.vertex_rays, progress.add);
+    r.rays += st.rays, r.target_rays += st.rays, ++r.target_rounds;
+    r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
+    r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
+  }
+  if (r.predicted.percent > o.target_error && r.warnings.empty()) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "--error %g: reached %.3f%% (at most %g rays per vertex)", o.target_error, r.predicted.percent, max_rays);
+    r.warnings.push_back(buf);
+  }
+  r.seconds_target = clock.lap();
 }
 
 }  // namespace
@@ -257,14 +329,16 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     refine_adaptively(scene, o, r);
     r.seconds_refine = clock.lap();
   }
+  r.vertex_rays.assign(r.mesh.num_vertices(), o.transfer.rays);
   if (o.fit.method != FitMethod::Point) fit(scene, o, progress, clock, r);
   if (r.point.size() == 0) r.point = r.transfer;
+  if (r.fit_data.allocation == SampleAllocation::Pilot) r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
+  if (o.target_error > 0) reach_target(scene, o, progress, clock, r);
   if (o.signal == AssetSignal::Ao) {
     // The paper's choice: clamp after the fit (a constrained solve is rarely worth it).
     r.clamped = clamp_ao(r.transfer);
     clamp_ao(r.point);
   }
-  if (r.fit_data.allocation == SampleAllocation::Pilot) r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, r.transfer);
   r.seconds_total = clock.total();
   r.metadata = bake_metadata(o, r);
   return r;

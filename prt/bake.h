@@ -51,6 +51,9 @@ struct BakeOptions {
   //! Pilot: the share of the sample rays the pilot saved (against sampling every face) that goes
   //! to more rays at the noisiest vertices instead (top_up_vertices); 0 keeps them unspent
   double vertex_share = 0.5;
+  //! --error: when > 0 (percent, eval's unit), trace more vertex rays until the error measured on
+  //! the pilot's held-out samples is at most this (needs Pilot allocation)
+  double target_error = 0;
   //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
   int sample_rays = 16;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
@@ -84,10 +87,13 @@ struct BakeResult {
   //! Pilot allocation: the asset's error measured on the pilot's held-out samples (what eval
   //! would report; all 0 otherwise)
   ErrorEstimate predicted;
+  std::vector<double> vertex_rays;  //!< #V: rays traced at each vertex, all rounds
+  uint64_t target_rays = 0;         //!< --error: the rays its rounds added
+  int target_rounds = 0;
   FitStats fit;
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
   uint64_t rays = 0;     //!< every transfer ray traced
-  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_top_up = 0, seconds_fit = 0,
+  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_top_up = 0, seconds_target = 0, seconds_fit = 0,
          seconds_total = 0;
   std::vector<std::string> warnings;
   Metadata metadata;     //!< what the asset records

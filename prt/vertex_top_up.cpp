@@ -29,25 +29,29 @@ constexpr int kLevels = 48;  // 16·2^(k/4) rays: 16 to about 64k
 int level_rays(int k) { return static_cast<int>(std::lround(16 * std::exp2(k / 4.0))); }
 }  // namespace
 
-TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget, const std::vector<double>& weight) {
+TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<double>& rays, uint64_t budget,
+                      const std::vector<double>& weight, double max_rays) {
   const size_t V = variance.size();
   if (!weight.empty() && weight.size() != V) throw InputError("top-up: one weight per vertex expected");
+  if (rays.size() != V) throw InputError("top-up: one ray count per vertex expected");
   TopUpPlan plan;
   plan.level.assign(V, -1);
   std::vector<double> spread(V, 0.0);  // √c_i, the per-ray standard deviation
   double total = 0;
   for (size_t i = 0; i < V; ++i) {
     const double w = weight.empty() ? 1.0 : weight[i];
-    if (rays_done >= 2 && std::isfinite(variance[i]) && variance[i] > 0 && w > 0 && std::isfinite(w))
-      spread[i] = std::sqrt(w * variance[i] * rays_done);
+    if (rays[i] >= 2 && std::isfinite(variance[i]) && variance[i] > 0 && w > 0 && std::isfinite(w))
+      spread[i] = std::sqrt(w * variance[i] * rays[i]);
     total += spread[i];
   }
-  if (!(total > 0) || budget == 0 || rays_done < 2) return plan;
-  // Water-filling: R + e_i = λ√c_i where that exceeds R (at most 16R), with λ set by bisection so
-  // that Σ e_i meets the budget. Counts are then rounded to the nearest of 16·2^(k/4) in log
-  // space, so a few buckets carry everything and the total stays close to the budget.
-  const double R = rays_done, cap = 16.0 * rays_done;
-  auto extra = [&](double lambda, size_t i) { return std::clamp(lambda * spread[i] - R, 0.0, cap); };
+  if (!(total > 0) || budget == 0) return plan;
+  // Water-filling: R_i + e_i = λ√c_i where that exceeds R_i (up to max_rays in all), with λ set by
+  // bisection so that Σ e_i meets the budget. Counts are then rounded to the nearest of
+  // 16·2^(k/4) in log space, so a few buckets carry everything and the total stays close to the
+  // budget.
+  auto extra = [&](double lambda, size_t i) {
+    return spread[i] > 0 ? std::clamp(lambda * spread[i] - rays[i], 0.0, std::max(0.0, max_rays - rays[i])) : 0.0;
+  };
   auto spent = [&](double lambda) {
     double sum = 0;
     for (size_t i = 0; i < V; ++i) sum += extra(lambda, i);
@@ -69,10 +73,21 @@ TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64
   return plan;
 }
 
-TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
-                        const TopUpPlan& plan, RowMatrixXd& values, std::vector<double>& variance, const ProgressFn& progress) {
+double planned_variance(const TopUpPlan& plan, const std::vector<double>& variance, const std::vector<double>& rays,
+                        const std::vector<double>& weight) {
+  double sum = 0;
+  for (size_t i = 0; i < variance.size(); ++i) {
+    if (!std::isfinite(variance[i])) continue;
+    const double w = weight.empty() ? 1.0 : weight[i], e = plan.level[i] < 0 ? 0.0 : level_rays(plan.level[i]);
+    sum += w * variance[i] * rays[i] / (rays[i] + e);
+  }
+  return sum;
+}
+
+TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, const TopUpPlan& plan,
+                        RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays, const ProgressFn& progress) {
   const size_t V = mesh.num_vertices();
-  if (static_cast<size_t>(values.rows()) != V || variance.size() != V || plan.level.size() != V)
+  if (static_cast<size_t>(values.rows()) != V || variance.size() != V || plan.level.size() != V || rays.size() != V)
     throw InputError("top-up: values, variances and the plan need one row per vertex");
   const Stopwatch clock;
   TopUpStats stats;
@@ -104,10 +119,11 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
     if (x2.cols() != K) throw InputError("top-up: the order does not match the values");
     stats.rays += ts.rays;
     stats.vertices += members.size();
-    const double r1 = rays_done, r2 = o.rays, sum = r1 + r2;
     for (Eigen::Index j = 0; j < n; ++j) {
       const size_t i = members[size_t(j)];
       const auto r = static_cast<Eigen::Index>(i);
+      const double r1 = rays[i], r2 = o.rays, sum = r1 + r2;
+      rays[i] = sum;
       values.row(r) = (r1 * values.row(r) + r2 * x2.row(j)) / sum;
       variance[i] = (r1 * r1 * variance[i] + r2 * r2 * v2[size_t(j)]) / (sum * sum);
     }
@@ -130,8 +146,9 @@ std::vector<double> vertex_areas(const Mesh& mesh) {
 TopUpStats top_up_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
                            uint64_t budget, RowMatrixXd& values, std::vector<double>& variance, const ProgressFn& progress) {
   if (variance.size() != mesh.num_vertices()) throw InputError("top-up: values and variances need one row per vertex");
-  return apply_top_up(mesh, scene, options, rays_done, plan_top_up(variance, rays_done, budget, vertex_areas(mesh)), values, variance,
-                      progress);
+  std::vector<double> rays(variance.size(), rays_done);
+  return apply_top_up(mesh, scene, options, plan_top_up(variance, rays, budget, vertex_areas(mesh), 17.0 * rays_done), values,
+                      variance, rays, progress);
 }
 
 }  // namespace prtsub

@@ -23,25 +23,33 @@ struct TopUpPlan {
   size_t vertices = 0;  //!< with a level
   uint64_t rays = 0;    //!< that the plan will trace
 };
-//! The allocation alone (see top_up_vertices), from each vertex's variance after `rays_done` rays.
+//! The allocation alone (see top_up_vertices), from each vertex's variance after rays[i] rays,
+//! each vertex to at most max_rays in all.
 //! \param weight #V or empty: how much each vertex's variance counts (the area it interpolates
 //!        over, for an error measured over the surface); empty counts them equally
-TopUpPlan plan_top_up(const std::vector<double>& variance, int rays_done, uint64_t budget,
-                      const std::vector<double>& weight = {});
+TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<double>& rays, uint64_t budget,
+                      const std::vector<double>& weight, double max_rays);
+
+//! Σ_i weight_i·variance_i as it will be after the plan (each variance falling as 1/rays).
+double planned_variance(const TopUpPlan& plan, const std::vector<double>& variance, const std::vector<double>& rays,
+                        const std::vector<double>& weight);
 
 //! A third of the area of the faces around each vertex: the weights for a surface error.
 std::vector<double> vertex_areas(const Mesh& mesh);
 
-//! Traces a plan's rays and merges them into `values` and `variance` (see top_up_vertices).
-TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,
-                        const TopUpPlan& plan, RowMatrixXd& values, std::vector<double>& variance, const ProgressFn& progress = {});
+//! Traces a plan's rays and merges them into `values`, `variance` and `rays` (each vertex's ray
+//! count so far, the weight of what it had). Give each call its own options.seed: a vertex must
+//! not draw the same rays twice.
+TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, const TopUpPlan& plan,
+                        RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
+                        const ProgressFn& progress = {});
 
 //! Traces up to `budget` more rays from the render vertices of `mesh` and merges them into
 //! `values` (#V by K) and `variance` (#V, as shadowed_transfer estimates it), each vertex
 //! weighted by its ray count. The first round traced `rays_done` rays at every vertex. The extra
 //! rays minimise the summed variance, each vertex's weighted by the area around it (the surface
 //! error eval measures), for the budget (water-filling on each vertex's estimated per-ray
-//! standard deviation), rounded to 16·2^(k/4) and at most 16× `rays_done`; an open
+//! standard deviation), rounded to 16·2^(k/4) and at most 16× `rays_done` more; an open
 //! vertex (variance 0: the estimator is exact there) gets none.
 //! `options` gives order, seed and threads; the result does not depend on threads.
 //! \throw InputError for shapes that do not match the mesh

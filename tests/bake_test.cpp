@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <map>
 #include <mutex>
 
@@ -76,6 +78,31 @@ TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
   EXPECT_EQ(meta["refine"], "none");
   // The point values ride along: the fit moved them, and not by much on a smooth signal.
   EXPECT_GT((r.point - r.transfer).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Bake, AnErrorTargetAddsVertexRaysUntilTheHeldOutErrorMeetsIt) {
+  // A fine ground under a high half-plane with 4 rays per vertex: its transfer changes slowly,
+  // so noise dominates and a target 20% below the default's own error is reachable with more
+  // vertex rays; one below the interpolation error is not, and says so.
+  const Mesh mesh = test::build(test::merge(test::grid(16, 0.3), test::quad(50, 0.4, false, 0.5)));
+  BakeOptions o;
+  o.transfer.rays = 4;
+  o.vertex_share = 0;  // no second round by default: the target alone adds vertex rays
+  const BakeResult plain = bake(mesh, o);
+  ASSERT_GT(plain.predicted.percent, 0.0);
+  o.target_error = 0.8 * plain.predicted.percent;
+  const BakeResult met = bake(mesh, o);
+  EXPECT_LE(met.predicted.percent, o.target_error);
+  EXPECT_GT(met.target_rays, 0u);
+  EXPECT_EQ(met.rays, plain.rays + met.target_rays);
+  EXPECT_GT(*std::max_element(met.vertex_rays.begin(), met.vertex_rays.end()), 4.0);
+  EXPECT_TRUE(met.warnings.empty()) << met.warnings.front();
+  o.target_error = 0.001;  // far below what 512 ground triangles can interpolate
+  const BakeResult unreachable = bake(mesh, o);
+  ASSERT_FALSE(unreachable.warnings.empty());
+  EXPECT_NE(unreachable.warnings.back().find("--error"), std::string::npos);
+  o.target_error = -1;
+  EXPECT_THROW(bake(mesh, o), InputError);
 }
 
 TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {
