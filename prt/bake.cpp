@@ -195,8 +195,8 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
                              o.sample_rays;
     const double saved = std::max(0.0, area_rays - static_cast<double>(r.fit_data.rays));
     const TopUpPlan plan =
-        plan_top_up(r.point_variance, r.vertex_rays, static_cast<uint64_t>(o.vertex_share * saved), vertex_areas(r.mesh),
-                    17.0 * o.transfer.rays);
+        plan_top_up(smoothed_variance(r.mesh, r.point_variance, r.vertex_rays), r.vertex_rays, static_cast<uint64_t>(o.vertex_share * saved), vertex_areas(r.mesh),
+                    16.0 * o.transfer.rays);
     if (progress.stage) progress.stage("vertex rays", plan.vertices);
     r.top_up = apply_top_up(r.mesh, scene, o.transfer, plan, r.transfer, r.point_variance, r.vertex_rays, progress.add);
     r.rays += r.top_up.rays;
@@ -244,21 +244,20 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
       break;
     }
     const double want = 2 * area * (target2 - bias2);  // Σ w var the noise may have
+    const std::vector<double> planning = smoothed_variance(r.mesh, r.point_variance, r.vertex_rays);
     uint64_t lo = 0, hi = 1024;
     while (hi < (uint64_t(1) << 40) &&
-           planned_variance(plan_top_up(r.point_variance, r.vertex_rays, hi, w, max_rays), r.point_variance, r.vertex_rays, w) > want)
+           planned_variance(plan_top_up(planning, r.vertex_rays, hi, w, max_rays), r.point_variance, r.vertex_rays, w) > want)
       hi *= 2;
     for (int it = 0; it < 30 && hi - lo > 1024; ++it) {
       const uint64_t mid = lo + (hi - lo) / 2;
-      (planned_variance(plan_top_up(r.point_variance, r.vertex_rays, mid, w, max_rays), r.point_variance, r.vertex_rays, w) > want ? lo
+      (planned_variance(plan_top_up(planning, r.vertex_rays, mid, w, max_rays), r.point_variance, r.vertex_rays, w) > want ? lo
                                                                                                                                   : hi) = mid;
     }
-    const TopUpPlan plan = plan_top_up(r.point_variance, r.vertex_rays, hi, w, max_rays);
+    const TopUpPlan plan = plan_top_up(planning, r.vertex_rays, hi, w, max_rays);
     if (plan.rays == 0) break;
-    TransferOptions to = o.transfer;
-    to.seed = mix64(o.transfer.seed + 0xE77ull * uint64_t(round));
-    if (progress.stage) progress.stage("error target", plan.vertices);
-    const TopUpStats st = apply_top_up(r.mesh, scene, to, plan, r.point, r.point_variance, r.vertex_rays, progress.add);
+    if (progress.stage) progress.stage("error target", plan.vertices);  // each vertex's lattice continued
+    const TopUpStats st = apply_top_up(r.mesh, scene, o.transfer, plan, r.point, r.point_variance, r.vertex_rays, progress.add);
     r.rays += st.rays, r.target_rays += st.rays, ++r.target_rounds;
     r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
     r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));

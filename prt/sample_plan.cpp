@@ -46,7 +46,7 @@ SurfaceSamples make_pilot_samples(const Mesh& mesh, const PilotOptions& o, uint6
   SampleOptions so;
   const double F = static_cast<double>(std::max<size_t>(mesh.num_faces(), 1));
   so.per_triangle = std::max(o.per_triangle, static_cast<double>(o.min_samples) / F);
-  so.min_per_triangle = 1;
+  so.min_per_triangle = so.per_triangle >= 1 ? 1 : 0;  // below one per face: by area, and the pools cover the rest
   so.seed = seed;
   return make_surface_samples(mesh, so);
 }

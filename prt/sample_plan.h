@@ -20,7 +20,7 @@ SampleAllocation parse_sample_allocation(const std::string& name);  //!< area, p
 const char* sample_allocation_name(SampleAllocation a);
 
 struct PilotOptions {
-  double per_triangle = 2;  //!< pilot samples per triangle (one each, the rest spread by area) ...
+  double per_triangle = 2;  //!< pilot samples per triangle (one each from 1 up, the rest by area; below 1 by area) ...
   //! ... and at least this many in all: a coarse mesh's large faces need several each to show a
   //! shadow inside them, and on a small mesh they cost nothing
   size_t min_samples = 4096;

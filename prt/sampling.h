@@ -1,5 +1,5 @@
-// Deterministic direction sampling for transfer: a cosine-weighted Fibonacci lattice
-// per point, decorrelated between points by a seeded random shift.
+// Deterministic direction sampling for transfer: cosine-weighted rank-1 lattices that can be
+// doubled, per point, decorrelated between points by a seeded random shift.
 #pragma once
 
 #include <Eigen/Core>
@@ -13,9 +13,27 @@ namespace prtsub {
 //! (Duff et al. 2017).
 void tangent_frame(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b);
 
-//! Cosine-weighted direction i of `count` in the local frame (z = normal), from a Fibonacci
-//! lattice shifted toroidally by (shift_u, shift_v). Every direction is individually
-//! cosine-distributed when the shift is uniform, so estimators built on it are unbiased.
-Eigen::Vector3d lattice_cosine_direction(uint32_t i, uint32_t count, double shift_u, double shift_v);
+//! Zaremba's index of the 2D rank-1 lattice {(q/M, q·a/M)}: the least max(1,|h1|)·max(1,|h2|)
+//! over nonzero dual vectors (h1 + a·h2 ≡ 0 mod M). The larger, the smaller the worst-case
+//! error for integrands of bounded variation; Fibonacci lattices are the best in 2D.
+uint64_t zaremba_index(uint32_t M, uint32_t a);
+
+//! A lattice of `base` points that can be doubled `doublings` times: generators a_0 .. a_d,
+//! lattice j having M_j = base·2^j points (q/M_j, {q·a_j/M_j}). a_0 is the best by Zaremba's
+//! index near base·(√5−1)/2 (a Fibonacci-like lattice), and each a_j is a_{j−1} or a_{j−1} + M_{j−1},
+//! the two that contain lattice j−1, whichever has the larger index.
+std::vector<uint32_t> doubling_generators(uint32_t base, int doublings);
+
+//! Point n of the doubling sequence, unshifted, in [0,1)²: the base lattice's points for
+//! n < base, then each doubling's new points (odd q). Its first base·2^j points are lattice j,
+//! so a later round of rays that continues from n = base·2^j fills in the earlier strata.
+//! \param a doubling_generators(base, d) with base·2^d > n
+Eigen::Vector2d doubling_lattice_point(uint32_t n, uint32_t base, const std::vector<uint32_t>& a);
+
+//! The cosine-weighted direction for (u, v) ∈ [0,1)² in the local frame (z = normal), by
+//! Malley's method: uniform on the disk (area-preserving in u), lifted to the hemisphere. Every
+//! direction is individually cosine-distributed when (u, v) is uniform (a random shift of a
+//! lattice), so estimators built on it are unbiased.
+Eigen::Vector3d cosine_direction(double u, double v);
 
 }  // namespace prtsub

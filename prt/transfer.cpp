@@ -15,9 +15,12 @@
 // minority — which keeps the stage close to a bare occlusion loop. With a single ray there
 // is no other half and β = 1.
 //
-// Directions come from Fibonacci lattices (low discrepancy for any size), shifted by hashes
-// of (seed, point index, half): decorrelated between points and identical for any thread
-// count. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
+// Directions come from rank-1 lattices chosen by Zaremba's index (Fibonacci-like for any size),
+// shifted by hashes of (seed, point's stream, half): decorrelated between points and identical
+// for any thread count. A lattice can be doubled, the new lattice containing the old one
+// (sampling.h), so a later round of rays at a vertex (vertex_top_up) fills in its first round's
+// strata instead of adding an independent set: the merged estimate converges as one round of
+// the total would. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
 // 20-45% faster than single rays.
 //
 // Points can also be traced in consecutive groups that a callback consumes as soon as a group is
@@ -43,6 +46,41 @@ namespace {
 
 constexpr Eigen::Index kGrain = 16;  // points per task: small enough to balance, large enough to amortise
 
+// Each half's doubling lattice (sampling.h): ray k of a call is ray first + k of its point's
+// sequence, in half (first + k) & 1, point (first + k) >> 1 of that half's lattice.
+struct RaySequence {
+  uint32_t first = 0;
+  uint32_t base[2] = {0, 0};
+  std::vector<uint32_t> generators[2];
+};
+
+RaySequence ray_sequence(const TransferOptions& o) {
+  RaySequence q;
+  q.first = o.first_ray;
+  const auto R = static_cast<uint64_t>(o.rays);
+  int doublings = 0;
+  if (o.first_round_rays == 0) {
+    if (o.first_ray != 0) throw InputError("a later round of rays needs the first round's count");
+    q.base[0] = uint32_t((R + 1) / 2), q.base[1] = uint32_t(R / 2);
+  } else {
+    // Rays first_ray .. end − 1 of the sequence whose lattices have R0·2^j points: the round
+    // starts at 0 or at such a count and ends at one.
+    const auto R0 = static_cast<uint64_t>(o.first_round_rays);
+    const uint64_t end = o.first_ray + R;
+    uint64_t at = R0;
+    while (at < end) at *= 2, ++doublings;
+    const uint64_t start = o.first_ray / std::max<uint64_t>(R0, 1);
+    const bool fits = R0 >= 2 && R0 % 2 == 0 && at == end &&
+                      (o.first_ray == 0 || (o.first_ray % R0 == 0 && (start & (start - 1)) == 0));
+    if (!fits)
+      throw InputError("a later round of rays must run from the first round's count (even) times 2^j to times 2^k, got rays " +
+                       std::to_string(o.first_ray) + " to " + std::to_string(end) + " after a first round of " + std::to_string(R0));
+    q.base[0] = q.base[1] = uint32_t(R0 / 2);
+  }
+  for (int h = 0; h < 2; ++h) q.generators[h] = doubling_generators(q.base[h], doublings);
+  return q;
+}
+
 struct PointRays {
   std::vector<RTCRay> rays;
   std::vector<Eigen::Vector3d> directions;  // world, double: used for SH
@@ -50,7 +88,7 @@ struct PointRays {
 
 // Fills the R rays of point i and traces them; afterwards rays[k].tfar == -inf if occluded.
 void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
-                 const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, PointRays& buf) {
+                 const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, const RaySequence& seq, PointRays& buf) {
   const uint32_t R = static_cast<uint32_t>(opt.rays);
   buf.rays.resize(R);
   buf.directions.resize(R);
@@ -59,13 +97,13 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
   Eigen::Vector3f local = scene.to_local(points.row(i).transpose());
   const Eigen::Vector3d away = offsets ? Eigen::Vector3d(offsets->row(i).transpose()) : n;
   Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
-  // Ray k belongs to half k & 1; each half is a lattice of its own size and shift.
-  Rng rng(opt.seed, opt.stream_offset + static_cast<uint64_t>(i));
+  Rng rng(opt.seed, opt.streams ? (*opt.streams)[static_cast<size_t>(i)] : opt.stream_offset + static_cast<uint64_t>(i));
   const double shift[2][2] = {{rng.uniform(), rng.uniform()}, {rng.uniform(), rng.uniform()}};
-  const uint32_t half_size[2] = {(R + 1) / 2, R / 2};
   for (uint32_t k = 0; k < R; ++k) {
-    const uint32_t h = k & 1;
-    Eigen::Vector3d d = lattice_cosine_direction(k >> 1, half_size[h], shift[h][0], shift[h][1]);
+    const uint32_t g = seq.first + k, h = g & 1;
+    const Eigen::Vector2d uv = doubling_lattice_point(g >> 1, seq.base[h], seq.generators[h]);
+    const double u = uv.x() + shift[h][0], v = uv.y() + shift[h][1];
+    const Eigen::Vector3d d = cosine_direction(u - std::floor(u), v - std::floor(v));
     Eigen::Vector3d w = (d.x() * t + d.y() * b + d.z() * n).normalized();
     buf.directions[k] = w;
     init_occlusion_ray(buf.rays[k], origin, w.cast<float>());
@@ -93,13 +131,13 @@ namespace {
 // the K values): the two halves are each an unbiased estimate, t = (n_A t_A + n_B t_B) / R, so
 // with per-ray variance σ² the result's is σ²/R = E‖t_A − t_B‖² · n_A n_B / R².
 void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
-                    const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, PointRays& buf, double* row,
-                    double* variance) {
+                    const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, const RaySequence& seq, PointRays& buf,
+                    double* row, double* variance) {
   const int K = sh_count(opt.order);
   double y[kMaxShOrder * kMaxShOrder];
   double acc[kMaxShOrder * kMaxShOrder], acc_a[kMaxShOrder * kMaxShOrder];
   const uint32_t R = static_cast<uint32_t>(opt.rays);
-  trace_point(scene, points, normals, offsets, i, opt, buf);
+  trace_point(scene, points, normals, offsets, i, opt, seq, buf);
   // Visible counts of the even (A) and odd (B) halves.
   uint32_t visible[2] = {0, 0}, size[2] = {(R + 1) / 2, R / 2};
   for (uint32_t k = 0; k < R; ++k) visible[k & 1] += !occluded(buf.rays[k]);
@@ -154,14 +192,16 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets,
                               std::vector<double>* variance) {
   check_transfer_options(opt);
+  const RaySequence seq = ray_sequence(opt);
   const Eigen::Index P = points.rows();
+  if (opt.streams && opt.streams->size() != static_cast<size_t>(P)) throw InputError("transfer: one stream per point expected");
   RowMatrixXd out(P, sh_count(opt.order));
   if (variance) variance->assign(static_cast<size_t>(P), 0.0);
   const Stopwatch clock;
   parallel_range(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i)
-      point_transfer(scene, points, normals, offsets, i, opt, buf, out.row(i).data(), variance ? variance->data() + i : nullptr);
+      point_transfer(scene, points, normals, offsets, i, opt, seq, buf, out.row(i).data(), variance ? variance->data() + i : nullptr);
     if (progress) progress(static_cast<size_t>(range.size()));
   });
   finish_stats(scene, stats, clock, P, opt.rays);
@@ -172,7 +212,9 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
                               const std::vector<size_t>& group_begin, const TransferOptions& opt, const GroupFn& consume,
                               TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets) {
   check_transfer_options(opt);
+  const RaySequence seq = ray_sequence(opt);
   const Eigen::Index P = points.rows();
+  if (opt.streams && opt.streams->size() != static_cast<size_t>(P)) throw InputError("transfer: one stream per point expected");
   if (group_begin.empty() || group_begin.front() != 0 || group_begin.back() != static_cast<size_t>(P) ||
       !std::is_sorted(group_begin.begin(), group_begin.end()))
     throw InputError("transfer: point groups must partition the points in order");
@@ -190,7 +232,7 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
       values.resize((last - first) * size_t(K));
       variance.resize(last - first);
       for (size_t i = first; i < last; ++i)
-        point_transfer(scene, points, normals, offsets, static_cast<Eigen::Index>(i), opt, buf, values.data() + (i - first) * size_t(K),
+        point_transfer(scene, points, normals, offsets, static_cast<Eigen::Index>(i), opt, seq, buf, values.data() + (i - first) * size_t(K),
                        variance.data() + (i - first));
       consume(size_t(g), values.data(), variance.data(), last - first);
       done += last - first;
@@ -204,13 +246,15 @@ uint64_t bare_occlusion_loop(const RayScene& scene, const RowMatrixX3d& points,
                              const RowMatrixX3d& normals, const TransferOptions& opt,
                              TransferStats* stats, const RowMatrixX3d* offsets) {
   check_transfer_options(opt);
+  const RaySequence seq = ray_sequence(opt);
+  if (opt.streams && opt.streams->size() != static_cast<size_t>(points.rows())) throw InputError("transfer: one stream per point expected");
   std::atomic<uint64_t> hits{0};
   const Stopwatch clock;
   parallel_range(points.rows(), opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     uint64_t local = 0;
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      trace_point(scene, points, normals, offsets, i, opt, buf);
+      trace_point(scene, points, normals, offsets, i, opt, seq, buf);
       for (const RTCRay& r : buf.rays) local += occluded(r);
     }
     hits += local;

@@ -17,6 +17,17 @@ struct TransferOptions {
   //! Point i draws its directions from stream stream_offset + i: give refinement's new
   //! vertices their render-vertex index, so their rays do not depend on batching.
   uint64_t stream_offset = 0;
+  //! If set (#P entries), point i's stream instead: a later round at some of the vertices gives
+  //! each its own vertex's stream. Not owned; must outlive the call.
+  const std::vector<uint64_t>* streams = nullptr;
+  //! A later round of the same points (same seed and streams): their first round traced
+  //! `first_round_rays` (even) and earlier rounds brought each to `first_ray` =
+  //! first_round_rays·2^j; this one traces the next `rays`, to first_round_rays·2^(j+d). Each
+  //! point's directions continue its lattice (each doubling contains the lattice before), so the
+  //! rounds merged by ray count are the estimate of all those rays traced at once, and as
+  //! stratified. first_round_rays = 0: a first round, of any count.
+  uint32_t first_ray = 0;
+  int first_round_rays = 0;
 };
 
 //! Called from worker threads with the number of points just finished.

@@ -14,10 +14,11 @@ struct TopUpStats {
   uint64_t rays = 0;
   double seconds = 0;
   double variance_before = 0, variance_after = 0;  //!< summed over the vertices (estimated)
-  std::vector<size_t> histogram;  //!< vertices by extra rays: none, then 16·2^(k/4) for k = 0, 1, ...
+  std::vector<size_t> histogram;  //!< [j + 1]: vertices doubled j times; [0]: vertices given none
 };
 
-//! Which vertices get how many more rays: level[i] = k for 16·2^(k/4) rays, -1 for none.
+//! Which vertices get how many more rays: level[i] = j doubles vertex i's rays j times (R_i·(2^j − 1)
+//! more), -1 for none.
 struct TopUpPlan {
   std::vector<int> level;
   size_t vertices = 0;  //!< with a level
@@ -34,12 +35,21 @@ TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<dou
 double planned_variance(const TopUpPlan& plan, const std::vector<double>& variance, const std::vector<double>& rays,
                         const std::vector<double>& weight);
 
+//! Each vertex's per-ray variance averaged over the faces around it (each face the mean of its
+//! corners', weighed by its area), at the vertex's own ray count: what to plan with. One
+//! vertex's estimate compares two half-estimates, a chi-square of one degree of freedom per
+//! coefficient (AO has one coefficient): too noisy to allocate by alone, while the variance
+//! itself varies smoothly over the surface. Vertices with an unknown variance keep theirs.
+std::vector<double> smoothed_variance(const Mesh& mesh, const std::vector<double>& variance, const std::vector<double>& rays);
+
 //! A third of the area of the faces around each vertex: the weights for a surface error.
 std::vector<double> vertex_areas(const Mesh& mesh);
 
 //! Traces a plan's rays and merges them into `values`, `variance` and `rays` (each vertex's ray
-//! count so far, the weight of what it had). Give each call its own options.seed: a vertex must
-//! not draw the same rays twice.
+//! count so far, the weight of what it had). `options` are the first round's (seed, stream
+//! offset, and rays = its count): each vertex's lattice is continued from where it stopped. An
+//! odd first round cannot be doubled; then each round is an independent lattice of its own seed.
+//! The merged variance is computed as if the rounds were independent: an upper estimate.
 TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, const TopUpPlan& plan,
                         RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
                         const ProgressFn& progress = {});
@@ -48,9 +58,9 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
 //! `values` (#V by K) and `variance` (#V, as shadowed_transfer estimates it), each vertex
 //! weighted by its ray count. The first round traced `rays_done` rays at every vertex. The extra
 //! rays minimise the summed variance, each vertex's weighted by the area around it (the surface
-//! error eval measures), for the budget (water-filling on each vertex's estimated per-ray
-//! standard deviation), rounded to 16·2^(k/4) and at most 16× `rays_done` more; an open
-//! vertex (variance 0: the estimator is exact there) gets none.
+//! error eval measures), for the budget (water-filling on each vertex's per-ray standard
+//! deviation, smoothed over its faces), each total rounded to rays_done·2^j and at most 16×
+//! `rays_done`; an open vertex (variance 0: the estimator is exact there) gets none.
 //! `options` gives order, seed and threads; the result does not depend on threads.
 //! \throw InputError for shapes that do not match the mesh
 TopUpStats top_up_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "helpers.h"
 
 namespace prtsub {
@@ -22,14 +26,64 @@ TEST(Sampling, TangentFrameIsRightHandedOrthonormalEverywhere) {
   }
 }
 
-TEST(Sampling, LatticeDirectionsAreCosineDistributed) {
-  // Under pdf cos/π: E[cos θ] = 2/3 and E[cos² θ] = 1/2, E[x] = E[y] = 0. cos²θ = 1 - u is
-  // linear in the lattice's stratified coordinate, so a shifted grid of n points misses its
+// Zaremba's index by brute force over a box of dual vectors, independent of the library's scan.
+uint64_t zaremba_brute(int64_t M, int64_t a) {
+  uint64_t best = uint64_t(M);
+  for (int64_t h1 = -M; h1 <= M; ++h1)
+    for (int64_t h2 = -M; h2 <= M; ++h2) {
+      if ((h1 == 0 && h2 == 0) || ((h1 + a * h2) % M + M) % M != 0) continue;
+      best = std::min(best, uint64_t(std::max<int64_t>(1, std::abs(h1)) * std::max<int64_t>(1, std::abs(h2))));
+    }
+  return best;
+}
+
+TEST(Sampling, ZarembaIndexMatchesABruteForceSearch) {
+  for (auto [M, a] : {std::pair<int, int>{89, 55}, {128, 79}, {128, 64}, {100, 3}, {64, 1}, {55, 34}, {256, 207}})
+    EXPECT_EQ(zaremba_index(uint32_t(M), uint32_t(a)), zaremba_brute(M, a)) << M << " " << a;
+  // The Fibonacci lattice of 89 points is among the best there are: no generator does better.
+  uint64_t best = 0;
+  for (uint32_t a = 1; a < 89; ++a) best = std::max(best, zaremba_index(89, a));
+  EXPECT_EQ(zaremba_index(89, 55), best);
+}
+
+TEST(Sampling, EachDoubledLatticeContainsTheOneBefore) {
+  for (uint32_t base : {128u, 100u, 7u}) {
+    const std::vector<uint32_t> a = doubling_generators(base, 4);
+    ASSERT_EQ(a.size(), 5u);
+    // The base is a good lattice: at least as good by Zaremba's index as round(base·golden).
+    EXPECT_GE(zaremba_index(base, a[0]), zaremba_index(base, uint32_t(std::lround(0.6180339887 * base)))) << base;
+    uint64_t M = base;
+    for (size_t j = 1; j < a.size(); ++j, M *= 2) EXPECT_EQ(a[j] % M, a[j - 1] % M) << base << " " << j;
+    // The first base·2^j points of the sequence are lattice j, each point once.
+    for (size_t j = 0; j < a.size(); ++j) {
+      const uint64_t Mj = uint64_t(base) << j;
+      std::vector<int> hit(Mj, 0);
+      for (uint32_t n = 0; n < Mj; ++n) {
+        const Eigen::Vector2d q = doubling_lattice_point(n, base, a);
+        const auto k = static_cast<uint64_t>(std::llround(q.x() * double(Mj)));
+        ASSERT_LT(k, Mj);
+        ++hit[k];
+        // On the lattice: (k, k·a_j)/M_j, to rounding.
+        EXPECT_NEAR(q.x() * double(Mj), double(k), 1e-9);
+        EXPECT_NEAR(q.y(), double((k * a[j]) % Mj) / double(Mj), 1e-12);
+      }
+      EXPECT_EQ(*std::min_element(hit.begin(), hit.end()), 1) << base << " " << j;
+      EXPECT_EQ(*std::max_element(hit.begin(), hit.end()), 1) << base << " " << j;
+    }
+  }
+}
+
+TEST(Sampling, ShiftedLatticeDirectionsAreCosineDistributed) {
+  // Under pdf cos/π: E[cos θ] = 2/3 and E[cos² θ] = 1/2, E[x] = E[y] = 0. cos²θ = 1 − u is
+  // linear in the lattice's stratified coordinate, so a shifted lattice of n points misses its
   // mean by at most 1/(2n) (1.2e-4 here); Monte Carlo would miss by ~1/sqrt(n) = 1.6e-2.
   const uint32_t n = 4096;
+  const std::vector<uint32_t> a = doubling_generators(n, 0);
   double m1 = 0, m2 = 0, mx = 0, my = 0;
   for (uint32_t i = 0; i < n; ++i) {
-    Eigen::Vector3d d = lattice_cosine_direction(i, n, 0.37, 0.81);
+    const Eigen::Vector2d q = doubling_lattice_point(i, n, a);
+    const double u = q.x() + 0.37, v = q.y() + 0.81;
+    const Eigen::Vector3d d = cosine_direction(u - std::floor(u), v - std::floor(v));
     EXPECT_NEAR(d.norm(), 1, 1e-12);
     EXPECT_GE(d.z(), 0);
     m1 += d.z(), m2 += d.z() * d.z(), mx += d.x(), my += d.y();

@@ -246,6 +246,54 @@ TEST(Transfer, GroupsAreTheSameTraceAndTheirMomentsDoNotDependOnThreads) {
   EXPECT_GT(largest, 0.0);  // some samples are partly occluded: the check has something to check
 }
 
+TEST(Transfer, AContinuedRoundMergesIntoTheOneRoundOfItsTotal) {
+  // A ground grid under a small quad: every vertex sees well over half of its sky, so each half's
+  // control-variate β is 1 in every round and the estimate is linear in the rays. Then 64 rays
+  // and the 64 (or 192) that continue them, merged by count, are the 128 (256) rays of the same
+  // sequence traced at once: the same directions, summed in another order.
+  const Mesh world = test::build(test::merge(test::grid(6), test::quad(0.15, 0.4, false, 0.35)));
+  const Mesh ground = test::build(test::grid(6));
+  const RayScene scene(world.positions, position_triangles(world));
+  const RowMatrixX3d p = vertex_positions(ground), offsets = vertex_offset_directions(ground);
+  TransferOptions first;
+  first.rays = 64;
+  const RowMatrixXd x1 = shadowed_transfer(scene, p, ground.normals, first, nullptr, {}, &offsets);
+  for (int total : {128, 256}) {
+    TransferOptions more = first, whole = first;
+    more.first_ray = 64, more.first_round_rays = 64, more.rays = total - 64;
+    whole.rays = total, whole.first_round_rays = 64;
+    const RowMatrixXd x2 = shadowed_transfer(scene, p, ground.normals, more, nullptr, {}, &offsets);
+    const RowMatrixXd one = shadowed_transfer(scene, p, ground.normals, whole, nullptr, {}, &offsets);
+    const RowMatrixXd merged = (64.0 * x1 + double(total - 64) * x2) / double(total);
+    EXPECT_LT((merged - one).cwiseAbs().maxCoeff(), 1e-12) << total;
+    EXPECT_GT((x1 - one).cwiseAbs().maxCoeff(), 1e-4) << total;  // the quad's shadow is there to be seen
+  }
+  // Per-point streams: a subset traced with its own vertices' streams is those rows exactly.
+  std::vector<uint64_t> streams = {3, 17, 40};
+  RowMatrixX3d sp(3, 3), sn(3, 3), so(3, 3);
+  for (int j = 0; j < 3; ++j)
+    sp.row(j) = p.row(Eigen::Index(streams[size_t(j)])), sn.row(j) = ground.normals.row(Eigen::Index(streams[size_t(j)])),
+    so.row(j) = offsets.row(Eigen::Index(streams[size_t(j)]));
+  TransferOptions subset = first;
+  subset.streams = &streams;
+  const RowMatrixXd xs = shadowed_transfer(scene, sp, sn, subset, nullptr, {}, &so);
+  for (int j = 0; j < 3; ++j) EXPECT_EQ(xs.row(j), x1.row(Eigen::Index(streams[size_t(j)])));
+  // A round that does not end on a doubling, an odd first round, or streams of the wrong length.
+  TransferOptions bad = first;
+  bad.first_ray = 64, bad.first_round_rays = 64, bad.rays = 100;
+  EXPECT_THROW(shadowed_transfer(scene, p, ground.normals, bad, nullptr, {}, &offsets), InputError);
+  bad.first_ray = 96, bad.rays = 32;
+  EXPECT_THROW(shadowed_transfer(scene, p, ground.normals, bad, nullptr, {}, &offsets), InputError);
+  bad.first_ray = 63, bad.first_round_rays = 63, bad.rays = 63;
+  EXPECT_THROW(shadowed_transfer(scene, p, ground.normals, bad, nullptr, {}, &offsets), InputError);
+  bad.first_ray = 64, bad.first_round_rays = 0, bad.rays = 64;
+  EXPECT_THROW(shadowed_transfer(scene, p, ground.normals, bad, nullptr, {}, &offsets), InputError);
+  subset.streams = nullptr;
+  std::vector<uint64_t> two = {1, 2};
+  subset.streams = &two;
+  EXPECT_THROW(shadowed_transfer(scene, sp, sn, subset, nullptr, {}, &so), InputError);
+}
+
 TEST(Transfer, RejectsBadOptions) {
   Mesh m = test::build(test::cube());
   TransferOptions o;
