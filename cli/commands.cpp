@@ -2,6 +2,7 @@
 // and prints what it returns. Heavier commands live beside this file (bench, render, compare,
 // eval --fits); run_cli dispatches and turns every exception into one line and an exit code.
 #include "cli/commands.h"
+#include "cli/images.h"
 
 #include <cmath>
 #include <cstdio>
@@ -15,7 +16,6 @@
 #include "cli/summary.h"
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/evaluate.h"
-#include "prtsub/prt/image_io.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sh.h"
@@ -157,7 +157,7 @@ int cmd_diff(int argc, char** argv) {
   if (!args.parse(argc, argv, 2)) return 0;
   if (!heat_path.empty()) check_writable(heat_path);
   if (!report.empty()) check_writable(report);
-  const Image a = read_image(a_path), b = read_image(b_path);
+  const Image a = cli_read_image(a_path), b = cli_read_image(b_path);
   Image heat;
   ImageError e;
   try {
@@ -165,7 +165,7 @@ int cmd_diff(int argc, char** argv) {
   } catch (const InputError& err) {
     throw InputError(a_path + " vs " + b_path + ": " + err.what());
   }
-  if (!heat_path.empty()) write_image(heat_path, heat);
+  if (!heat_path.empty()) cli_write_image(heat_path, heat);
   Report r;
   r.set("command", "diff");
   r.set("a", a_path);

@@ -4,6 +4,7 @@
 // own triangle counts; adaptive runs at exactly those counts and at the requested budgets.
 // The page is self-contained: inline SVG plots and PNG frames as data URIs.
 #include "cli/commands.h"
+#include "cli/images.h"
 
 #include <cmath>
 #include <cstdio>
@@ -18,7 +19,6 @@
 #include "cli/specs.h"
 #include "cli/report.h"
 #include "prtsub/prt/evaluate.h"
-#include "prtsub/prt/image_io.h"
 #include "prtsub/prt/lights.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/sh.h"
@@ -248,7 +248,7 @@ std::map<std::string, std::string> render_frames(const CompareCli& c, const Bake
   TransferOptions fo = base.transfer;
   fo.rays = c.frame_rays;
   const Image reference = render_reference(source_scene, ref_hits, vertex_positions(source), source.normals, source.triangles, light, 0.8, fo);
-  write_image(c.out_dir + "/frame_reference.png", reference);
+  cli_write_image(c.out_dir + "/frame_reference.png", reference);
   images["per-pixel reference"] = read_file_bytes(c.out_dir + "/frame_reference.png");
   for (const auto& [name, r] : keep) {
     const RayScene scene(vertex_positions(r.mesh), r.mesh.triangles);
@@ -261,8 +261,8 @@ std::map<std::string, std::string> render_frames(const CompareCli& c, const Bake
       Image heat;
       const ImageError err = image_error(frame, reference, &heat);
       const std::string file = std::string(name == "uniform" ? "frame_uniform" : "frame_adaptive") + (use_fit ? "_fit" : "_point");
-      write_image(c.out_dir + "/" + file + ".png", frame);
-      write_image(c.out_dir + "/" + file + "_error.png", heat);
+      cli_write_image(c.out_dir + "/" + file + ".png", frame);
+      cli_write_image(c.out_dir + "/" + file + "_error.png", heat);
       images[label + " (" + std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%)"] =
           read_file_bytes(c.out_dir + "/" + file + ".png");
       images["error of " + label] = read_file_bytes(c.out_dir + "/" + file + "_error.png");

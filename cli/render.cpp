@@ -2,11 +2,11 @@
 #include <cstdio>
 
 #include "cli/commands.h"
+#include "cli/images.h"
 #include "cli/options.h"
 #include "cli/report.h"
 #include "cli/specs.h"
 #include "prtsub/prt/asset.h"
-#include "prtsub/prt/image_io.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/subdiv/stopwatch.h"
 
@@ -99,7 +99,7 @@ int cmd_render(int argc, char** argv) {
   const Image frame = c.reference ? reference_frame(scene, hits, asset, light, c, r)
                                   : shade_gouraud(hits, asset.triangles, vertex_radiance(asset.transfer, light, c.albedo));
   const double t_shade = clock.lap();
-  write_image(c.output, frame, ImageWriteOptions{c.exposure});
+  cli_write_image(c.output, frame, ImageWriteOptions{c.exposure});
   r.set("seconds_write", clock.lap());
 
   r.set("command", "render");

@@ -1,9 +1,9 @@
+#include "cli/images.h"
 #include "cli/specs.h"
 
 #include <cmath>
 #include <sstream>
 
-#include "prtsub/prt/image_io.h"
 
 namespace prtsub {
 namespace {
@@ -37,7 +37,7 @@ ShLight parse_light(const std::string& spec, int order, const std::string& optio
   const std::string what = option + " " + spec;
   if (kind == "env") {
     if (arg.empty()) throw UsageError(what + ": expected env:PATH");
-    return environment_light(order, read_image(arg));
+    return environment_light(order, cli_read_image(arg));
   }
   if (kind == "sh") {
     const std::vector<double> c = split_numbers(arg, what);

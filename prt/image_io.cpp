@@ -56,12 +56,12 @@ Image read_image(const std::string& path) {
   return img;
 }
 
-void write_image(const std::string& path, const Image& img, const ImageWriteOptions& options) {
+std::string encode_image(const std::string& path, const Image& img, const ImageWriteOptions& options) {
   const std::string ext = extension(path);
   if (ext != "exr" && ext != "png") throw InputError(path + ": unknown image format (use .exr or .png)");
-  // Encoded into memory through OIIO's I/O proxy, then written like every other output
-  // (write_file_atomically: a temporary file renamed into place, devices in place, every error
-  // checked), so an image follows the same rules as an asset or a report.
+  // Encoded into memory through OIIO's I/O proxy; write_image then writes it like every other
+  // output (write_file_atomically: a temporary file renamed into place, devices in place, every
+  // error checked), so an image follows the same rules as an asset or a report.
   std::vector<unsigned char> encoded;
   OIIO::Filesystem::IOVecOutput proxy(encoded);
   auto out = OIIO::ImageOutput::create("image." + ext);
@@ -85,7 +85,11 @@ void write_image(const std::string& path, const Image& img, const ImageWriteOpti
   const std::string err = ok ? "" : out->geterror();
   ok = out->close() && ok;
   if (!ok) throw IoError(path + ": cannot encode image (" + (err.empty() ? out->geterror() : err) + ")");
-  write_file_atomically(path, std::string(encoded.begin(), encoded.end()));
+  return std::string(encoded.begin(), encoded.end());
+}
+
+void write_image(const std::string& path, const Image& img, const ImageWriteOptions& options) {
+  write_file_atomically(path, encode_image(path, img, options));
 }
 
 }  // namespace prtsub

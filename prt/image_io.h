@@ -18,9 +18,13 @@ struct ImageWriteOptions {
 
 //! Writes by extension: .exr is linear float (all channels as given); .png is tone-mapped
 //! 8-bit sRGB: clamp(exposure · v, 0, 1), then the sRGB curve; alpha is kept linear.
-//! Goes through a temporary file renamed into place.
+//! Goes through a temporary file renamed into place (write_file_atomically).
 //! \throw IoError, InputError for an unknown extension
 void write_image(const std::string& path, const Image& image, const ImageWriteOptions& options = {});
+
+//! The file write_image would write, in memory (the format from path's extension).
+//! \throw IoError, InputError for an unknown extension
+std::string encode_image(const std::string& path, const Image& image, const ImageWriteOptions& options = {});
 
 //! The sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
 double linear_to_srgb(double v);

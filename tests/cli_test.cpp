@@ -5,6 +5,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <utility>
+
+#include <sys/wait.h>
 
 #include "cli_helpers.h"
 #include "prtsub/prt/asset.h"
@@ -184,6 +187,37 @@ TEST_F(Cli, BenchReportsBothRates) {
   std::string json = read_file_bytes(rep);
   EXPECT_NE(json.find("\"transfer_rays_per_second\""), std::string::npos);
   EXPECT_NE(json.find("\"bare_rays_per_second\""), std::string::npos);
+}
+
+TEST_F(Cli, TheImageLibraryLoadsOnlyForCommandsThatUseImages) {
+  // The dynamic loader's own log (LD_DEBUG=libs) names every library it opens: OpenImageIO
+  // only for a command that reads or writes an image, through the image module. Without the
+  // module, such a command fails in one line naming it, and writes nothing.
+  const std::string asset = dir.path("a.ply"), log = dir.path("log.txt");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", scene(), "-o", asset, "--rays", "8", "--fit", "point"}), 0);
+  testing::internal::GetCapturedStdout();
+  auto opened = [&](const std::string& args, const std::string& env = "") {
+    const std::string cmd = env + " LD_DEBUG=libs " + PRTSUB_BINARY + " " + args + " > /dev/null 2> " + log;
+    const int status = std::system(cmd.c_str());
+    const std::string text = read_file_bytes(log);
+    size_t n = 0;
+    for (size_t at = text.find("libOpenImageIO"); at != std::string::npos; at = text.find("libOpenImageIO", at + 1)) ++n;
+    return std::make_pair(status, n);
+  };
+  EXPECT_EQ(opened("--version"), std::make_pair(0, size_t(0)));
+  EXPECT_EQ(opened("inspect " + asset), std::make_pair(0, size_t(0)));
+  const auto rendered = opened("render " + asset + " --light sky:1,1,1 --size 32,24 -o " + dir.path("f.png"));
+  EXPECT_EQ(rendered.first, 0);
+  EXPECT_GT(rendered.second, 0u);
+  EXPECT_TRUE(test::file_exists(dir.path("f.png")));
+  const std::string missing = dir.path("no_module.so");
+  const std::string cmd = "PRTSUB_IMAGE_MODULE=" + missing + " " + PRTSUB_BINARY + " render " + asset +
+                          " --light sky:1,1,1 --size 32,24 -o " + dir.path("g.png") + " > /dev/null 2> " + log;
+  EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1);
+  EXPECT_EQ(read_file_bytes(log), "prtsub: error: cannot load the image module (reading and writing images needs it): tried " + missing +
+                                      " (missing)\n");
+  EXPECT_FALSE(test::file_exists(dir.path("g.png")));
 }
 
 TEST_F(Cli, BundledExampleBakes) {
