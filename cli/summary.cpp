@@ -1,6 +1,7 @@
 #include "cli/summary.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "prtsub/prt/sh.h"
 
@@ -35,6 +36,19 @@ void record(Report& r, const RefineStats& st) {
 }
 
 // How the samples were spread: faces by their sample count, in powers of two.
+// Vertices by their rays relative to the first round: 1×, 2×, 4×, 8×, 16× and more (the second
+// round and --error double a vertex's rays).
+void record_ray_spread(Report& r, const std::vector<double>& rays, int first_round) {
+  std::vector<size_t> bins(5, 0);
+  for (double n : rays) {
+    const double ratio = first_round > 0 ? n / first_round : 1.0;
+    const long b = ratio > 1 ? std::lround(std::log2(ratio)) : 0;
+    ++bins[static_cast<size_t>(std::clamp<long>(b, 0, 4))];
+  }
+  const char* names[5] = {"1x", "2x", "4x", "8x", "16x_up"};
+  for (size_t b = 0; b < 5; ++b) r.set(std::string("vertices_with_rays_") + names[b], bins[b]);
+}
+
 void record_sample_spread(Report& r, const FitData& data) {
   const SurfaceSamples& s = data.samples;
   const size_t F = s.begin.empty() ? 0 : s.begin.size() - 1;
@@ -125,6 +139,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   r.set("signal", asset_signal_name(o.signal));
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
+  record_ray_spread(r, res.vertex_rays, o.transfer.rays);
   if (o.target_error > 0) {
     r.set("target_error_percent", o.target_error);
     r.set("target_rays", res.target_rays);
@@ -188,7 +203,9 @@ void print_bake_summary(const Report& r) {
                        "{faces_with_samples_2_3}, 4-7: {faces_with_samples_4_7}, 8-15: {faces_with_samples_8_15}, 16-31: "
                        "{faces_with_samples_16_31}, 32-63: {faces_with_samples_32_63}, 64+: {faces_with_samples_64_up}",
                        "              vertex rays: {top_up_rays} more at the {top_up_vertices} noisiest vertices ({seconds_top_up:3} s); "
-                       "their summed variance x{top_up_variance_ratio:3}"});
+                       "their summed variance x{top_up_variance_ratio:3}",
+                       "              vertices by rays: 1x: {vertices_with_rays_1x}, 2x: {vertices_with_rays_2x}, 4x: "
+                       "{vertices_with_rays_4x}, 8x: {vertices_with_rays_8x}, 16x+: {vertices_with_rays_16x_up}"});
     const std::string cg = r.has("fit_cg_note") ? r.format(", {fit_cg_iterations} {fit_cg_note}") : "";
     std::printf("%s\n", r.format("              solve {seconds_fit:3} s (assemble {seconds_fit_assemble:3}, factor "
                                  "{seconds_fit_factor:3}, solve {seconds_fit_solve:3}; {fit_solver}" + cg +

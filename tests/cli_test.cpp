@@ -58,6 +58,16 @@ TEST_F(Cli, BakeWritesAnAssetAndAReportWithTheDocumentedKeys) {
   for (const char* bin : {"0", "1", "2_3", "4_7", "8_15", "16_31", "32_63", "64_up"}) faces += number(std::string("faces_with_samples_") + bin);
   EXPECT_EQ(faces, 82);
   EXPECT_EQ(number("faces_with_samples_0"), number("interpolated_faces"));
+  // Every vertex by its rays (16, 32, 64, 128, 256: the second round doubles a vertex's rays at
+  // most four times), and the extra rays those counts imply are the second round's.
+  double vertices = 0, extra = 0, factor = 1;
+  for (const char* bin : {"1x", "2x", "4x", "8x", "16x_up"}) {
+    const double n = number(std::string("vertices_with_rays_") + bin);
+    vertices += n, extra += n * 16 * (factor - 1), factor *= 2;
+  }
+  EXPECT_EQ(vertices, double(a.transfer.rows()));
+  EXPECT_EQ(number("vertices_with_rays_1x") + number("top_up_vertices"), vertices);
+  EXPECT_EQ(extra, number("top_up_rays"));
   EXPECT_GT(number("predicted_error_percent"), 0);
   EXPECT_GT(number("predicted_error_samples"), 0);
   EXPECT_NE(json.find("\"fit\": \"lsq\""), std::string::npos);
