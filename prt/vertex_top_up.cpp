@@ -65,15 +65,20 @@ TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<dou
   if (!(total > 0) || budget == 0) return plan;
   // Water-filling: R_i + e_i = λ√(w_i c_i), rounded in log space to R_i·2^j (j ≥ 1; none below
   // R_i·√2), with λ the largest for which the rounded plan fits the budget (bisection).
-  auto doublings = [&](double lambda, size_t i) {
+  // log2(√(w_i c_i) / R_i) once per vertex: the bisection below evaluates every vertex 100 times.
+  std::vector<double> offset(V, 0.0);
+  for (size_t i = 0; i < V; ++i)
+    if (spread[i] > 0) offset[i] = std::log2(spread[i] / rays[i]);
+  auto doublings = [&](double log_lambda, size_t i) {
     if (spread[i] <= 0 || most[i] < 1) return -1;
-    const double want = lambda * spread[i] / rays[i];
-    if (!(want >= std::sqrt(2.0))) return -1;
-    return std::min(most[i], static_cast<int>(std::lround(std::log2(want))));
+    const double want = log_lambda + offset[i];  // log2 of the wanted total over R_i
+    if (!(want >= 0.5)) return -1;
+    return std::min(most[i], static_cast<int>(std::lround(want)));
   };
   auto spent = [&](double lambda) {
+    const double log_lambda = std::log2(lambda);
     double sum = 0;
-    for (size_t i = 0; i < V; ++i) sum += extra_rays(rays[i], doublings(lambda, i));
+    for (size_t i = 0; i < V; ++i) sum += extra_rays(rays[i], doublings(log_lambda, i));
     return sum;
   };
   double lo = 0, hi = 1;
@@ -83,7 +88,7 @@ TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<dou
     (spent(mid) <= static_cast<double>(budget) ? lo : hi) = mid;
   }
   for (size_t i = 0; i < V; ++i) {
-    plan.level[i] = doublings(lo, i);
+    plan.level[i] = doublings(std::log2(lo), i);
     if (plan.level[i] < 0) continue;
     ++plan.vertices;
     plan.rays += static_cast<uint64_t>(extra_rays(rays[i], plan.level[i]));
