@@ -45,6 +45,8 @@ void BakeCli::add_fit(ArgParser& args) {
               mass_matrix_name);
   args.choice("--solver", "lsq: conjugate gradients (analytic mass; CHOLMOD if they stall), or always a CHOLMOD\n"
               "Cholesky factorisation", &f.solver, {FitSolver::Auto, FitSolver::Cholmod}, fit_solver_name);
+  args.option("--cg-tolerance", "T", "lsq: conjugate gradients stop at this residual relative to the right-hand side",
+              &f.cg_tolerance, 1e-16, 1.0);
   args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"
             "variate (for comparison; noisier)", &no_control_variate_);
   args.flag("--no-noise-weighting", "lsq: keep the whole fit everywhere instead of weighing its correction against the point\n"

@@ -102,6 +102,8 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("fit_stabilizer", f.stabilizer);
   r.set("fit_system_nonzeros", f.system_nonzeros);
   r.set("fit_factor_nonzeros", f.factor_nonzeros);
+  r.set("fit_stiff_share", f.stiff_share);
+  r.set("fit_predicted_factor_nonzeros", f.predicted_factor_entries);
   r.set("solve_memory_mib", f.solve_memory_mib);
   r.set("seconds_fit_assemble", f.seconds_assemble);
   r.set("seconds_fit_factor", f.seconds_factor);

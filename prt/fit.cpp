@@ -22,15 +22,20 @@
 // With the analytic A, b is estimated through a control variate on the prior (the point samples):
 // A·prior plus the samples' estimate of ∫h_i (f − g_prior), so its error scales with f − g_prior.
 //
-// The signal arrives as face moments (3 rows of K per face), never per sample. The system is
-// assembled straight into its final pattern and scaled to a unit diagonal; vertices that no
-// sampled face touches are fixed at their prior and moved to the right-hand side.
+// The signal arrives as face moments (3 rows of K per face), never per sample. The unknowns are
+// numbered breadth-first over the mesh, so a row's neighbours sit in nearby rows whatever the
+// file's vertex order; the system is assembled row by row, in parallel, straight into its final
+// pattern (each entry summing its terms in one fixed order: the same for any thread count), and
+// scaled to a unit diagonal. Vertices that no sampled face touches are fixed at their prior and
+// moved to the right-hand side.
 //
 // Solving: with the analytic mass, block conjugate gradients (block_cg.cpp) started at the prior:
-// the scaled mass matrix is well conditioned on any mesh, and CG needs ~30 passes over the matrix
-// where a Cholesky factor of a 3-D mesh fills in. If CG stalls, or with the sampled mass (which
-// can be singular), one CHOLMOD supernodal Cholesky factorisation (AMD ordering) for all K
-// right-hand sides. If it fails or its pivot ratio falls below 1e-7 (α = 0 with the sampled
+// the scaled mass matrix is well conditioned on any mesh, and CG needs 10–25 passes over the
+// matrix to a relative residual of 1e-6, where a Cholesky factor of a 3-D mesh fills in. Where
+// the regulariser dominates many rows (slivers beside large faces: buildings), the system is stiff;
+// that is decided before any iteration, and if CHOLMOD's symbolic analysis then finds a small
+// factor it solves instead. If CG stalls after all, or with the sampled mass (which can be
+// singular), one CHOLMOD supernodal Cholesky factorisation (AMD ordering) for all K right-hand sides. If it fails or its pivot ratio falls below 1e-7 (α = 0 with the sampled
 // mass matrix, faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
 // λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed.
 //
@@ -50,8 +55,12 @@
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <cfloat>
 #include <cstdio>
 #include <cmath>
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include "prtsub/prt/block_cg.h"
 #include "prtsub/prt/parallel.h"
@@ -133,10 +142,81 @@ const char* mass_matrix_name(MassMatrix m) { return m == MassMatrix::Analytic ? 
 
 namespace {
 
-std::vector<FaceGeometry> all_face_geometry(const Mesh& mesh) {
+std::vector<FaceGeometry> all_face_geometry(const Mesh& mesh, int threads = 0) {
   std::vector<FaceGeometry> g(mesh.num_faces());
-  for (size_t f = 0; f < g.size(); ++f) g[f] = face_geometry(mesh, mesh.triangles[f]);
+  parallel_range(g.size(), threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f < r.end(); ++f) g[f] = face_geometry(mesh, mesh.triangles[f]);
+  });
   return g;
+}
+
+// body(first, last) for vertex ranges in parallel, each walking every face in order and taking
+// the corners in its range: each vertex sums its terms in the order of one serial pass, so the
+// values do not depend on the number of threads, and the faces' moments (3 rows of K per face,
+// the largest input) are read in order, not gathered at random through each vertex's corners.
+template <class Body>
+void by_vertex_range(size_t V, int threads, Body&& body) {
+  const size_t workers = threads > 0 ? size_t(threads) : size_t(tbb::info::default_concurrency());
+  const size_t ranges = V < 4096 ? 1 : std::min<size_t>(workers, V / 1024);
+  parallel_range(ranges, threads, size_t(1), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) body(V * i / ranges, V * (i + 1) / ranges);
+  });
+}
+
+// Each vertex's corners h = 3f + c, in increasing order.
+struct VertexCorners {
+  std::vector<uint32_t> begin;  // #V + 1
+  std::vector<uint32_t> corner;
+};
+
+VertexCorners vertex_corners(const Mesh& mesh) {
+  VertexCorners vc;
+  vc.begin.assign(mesh.num_vertices() + 1, 0);
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) ++vc.begin[t[c] + 1];
+  for (size_t v = 0; v < mesh.num_vertices(); ++v) vc.begin[v + 1] += vc.begin[v];
+  vc.corner.resize(3 * mesh.num_faces());
+  std::vector<uint32_t> end(vc.begin.begin(), vc.begin.end() - 1);
+  for (uint32_t h = 0; h < vc.corner.size(); ++h) vc.corner[end[mesh.triangles[h / 3][h % 3]]++] = h;
+  return vc;
+}
+
+// The free vertices' unknowns in breadth-first order over the faces. A scanned mesh's vertex
+// order can be far from its faces' (armadillo: consecutive faces' first vertices lie a median
+// 25,000 apart), and every pass of CG reads each row's neighbours: numbered breadth-first, they
+// sit in nearby rows.
+// Returns each vertex's slot (-1: not free); `queue` receives the free vertices in slot order.
+std::vector<Eigen::Index> breadth_first_slots(const Mesh& mesh, const VertexCorners& vc, const std::vector<char>& free,
+                                              std::vector<uint32_t>& queue) {
+  const size_t V = mesh.num_vertices();
+  std::vector<Eigen::Index> slot(V, -1);
+  queue.clear();
+  queue.reserve(V);
+  Eigen::Index n = 0;
+  size_t head = 0;
+  for (uint32_t seed = 0; seed < V; ++seed) {
+    if (!free[seed] || slot[seed] >= 0) continue;
+    slot[seed] = n++;
+    queue.push_back(seed);
+    for (; head < queue.size(); ++head)
+      for (uint32_t k = vc.begin[queue[head]]; k < vc.begin[queue[head] + 1]; ++k)
+        for (uint32_t u : mesh.triangles[vc.corner[k] / 3])
+          if (free[u] && slot[u] < 0) slot[u] = n++, queue.push_back(u);
+  }
+  return slot;
+}
+
+// Row c of a sampled face's mass block, Σ_k w_k h_c(p_k) h_j(p_k), and its lumped mass Σ_k w_k h_c(p_k).
+double sampled_mass_row(const SurfaceSamples& s, size_t f, int c, double row[3]) {
+  double lumped = 0;
+  row[0] = row[1] = row[2] = 0;
+  for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) {
+    const auto r = static_cast<Eigen::Index>(k);
+    const double wh = s.weight[k] * s.barycentric(r, c);
+    lumped += wh;
+    for (int j = 0; j < 3; ++j) row[j] += wh * s.barycentric(r, j);
+  }
+  return lumped;
 }
 
 double area_floor(const std::vector<FaceGeometry>& g) {
@@ -196,39 +276,55 @@ EdgePairs interior_edge_pairs(const Mesh& mesh) {
   return pairs;
 }
 
+// One interior edge's 4×4 block w·q qᵀ over the four vertices of its two faces; `used` is false
+// when a face is degenerate or the two faces do not span four distinct vertices.
+struct EdgeBlock {
+  uint32_t idx[4];
+  double q[4];
+  double w = 0;
+  bool used = false;
+};
+
+EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const std::array<uint32_t, 2>& edge, double floor,
+                     double scale) {
+  EdgeBlock b;
+  double area[2];
+  int n = 0;
+  std::fill_n(b.q, 4, 0.0);
+  for (int side = 0; side < 2; ++side) {
+    const uint32_t he = edge[size_t(side)];
+    const size_t f = he / 3;
+    const int c = int(he % 3);  // the corner opposite the shared edge
+    const FaceGeometry& fg = g[f];
+    area[side] = fg.area;
+    if (!(fg.area > floor)) return b;
+    // In-plane unit normal of the shared edge, pointing into this face (towards corner c).
+    const Eigen::Vector3d m = fg.n.cross(fg.e[c]).normalized();
+    for (int i = 0; i < 3; ++i) {
+      const uint32_t v = mesh.triangles[f][i];
+      int slot = 0;
+      while (slot < n && b.idx[slot] != v) ++slot;
+      if (slot == n) b.idx[n++] = v;
+      b.q[slot] += fg.n.cross(fg.e[i]).dot(m) / (2 * fg.area);  // ∇h_v · m
+    }
+  }
+  if (n != 4) return b;
+  const double h = 2 * area[0] * area[1] / (area[0] + area[1]);
+  b.w = scale * 2 * h * h;
+  b.used = true;
+  return b;
+}
+
 template <class Emit>
 size_t emit_edge(const Mesh& mesh, const std::vector<FaceGeometry>& g, const EdgePairs& edges, double scale, Emit&& emit) {
   const double floor = area_floor(g);
   size_t used = 0;
   for (const auto& edge : edges) {
-    uint32_t idx[4];
-    double q[4] = {0, 0, 0, 0}, area[2];
-    int n = 0;
-    bool ok = true;
-    for (int side = 0; side < 2 && ok; ++side) {
-      const uint32_t he = edge[size_t(side)];
-      const size_t f = he / 3;
-      const int c = int(he % 3);  // the corner opposite the shared edge
-      const FaceGeometry& fg = g[f];
-      area[side] = fg.area;
-      if (!(fg.area > floor)) ok = false;
-      if (!ok) break;
-      // In-plane unit normal of the shared edge, pointing into this face (towards corner c).
-      const Eigen::Vector3d m = fg.n.cross(fg.e[c]).normalized();
-      for (int i = 0; i < 3; ++i) {
-        const uint32_t v = mesh.triangles[f][i];
-        int slot = 0;
-        while (slot < n && idx[slot] != v) ++slot;
-        if (slot == n) idx[n++] = v;
-        q[slot] += fg.n.cross(fg.e[i]).dot(m) / (2 * fg.area);  // ∇h_v · m
-      }
-    }
-    if (!ok || n != 4) continue;
+    const EdgeBlock b = edge_block(mesh, g, edge, floor, scale);
+    if (!b.used) continue;
     ++used;
-    const double h = 2 * area[0] * area[1] / (area[0] + area[1]);
-    const double w = scale * 2 * h * h;
     for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) emit(idx[i], idx[j], w * q[i] * q[j]);
+      for (int j = 0; j < 4; ++j) emit(b.idx[i], b.idx[j], b.w * b.q[i] * b.q[j]);
   }
   return used;
 }
@@ -352,7 +448,7 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const R
 
 namespace {
 
-// One pass over the faces: the lumped masses (∫h_i over sampled faces, and the samples' own
+// Per vertex, over its corners: the lumped masses (∫h_i over sampled faces, and the samples' own
 // Σ_j w_j h_i(p_j)) and b from the face moments, with the control variate's correction.
 struct FaceSums {
   Eigen::VectorXd lumped_analytic, lumped_sampled;
@@ -372,44 +468,53 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   // is then proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
   const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
   FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
-  for (size_t f = 0; f < mesh.num_faces(); ++f) {
-    const Triangle& tri = mesh.triangles[f];
-    if (face_interpolated(s, f)) {
-      // No samples, by design: the face's data is the prior's interpolant, so it adds
-      // ∫h_i g_prior = A_f·prior exactly, and its mass to both lumped masses.
+  by_vertex_range(size_t(V), o.threads, [&](size_t first, size_t last) {
+    for (size_t f = 0; f < mesh.num_faces(); ++f)
       for (int c = 0; c < 3; ++c) {
-        sums.lumped_analytic[tri[c]] += geom[f].area / 3;
-        sums.lumped_sampled[tri[c]] += geom[f].area / 3;
-        for (int c2 = 0; c2 < 3; ++c2) sums.b.row(tri[c]) += geom[f].area / (c == c2 ? 6.0 : 12.0) * prior.row(tri[c2]);
+        const Triangle& tri = mesh.triangles[f];
+        const uint32_t v = tri[c];
+        if (v < first || v >= last) continue;
+        double* row = sums.b.row(v).data();
+        if (face_interpolated(s, f)) {
+          // No samples, by design: the face's data is the prior's interpolant, so it adds
+          // ∫h_i g_prior = A_f·prior exactly, and its mass to both lumped masses.
+          sums.lumped_analytic[v] += geom[f].area / 3;
+          sums.lumped_sampled[v] += geom[f].area / 3;
+          for (int c2 = 0; c2 < 3; ++c2) {
+            const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0);
+            const double* p = prior.row(tri[c2]).data();
+            for (Eigen::Index q = 0; q < K; ++q) row[q] += coeff * p[q];
+          }
+          continue;
+        }
+        if (!face_has_samples(s, f)) continue;
+        double ms[3];
+        sums.lumped_analytic[v] += geom[f].area / 3;
+        sums.lumped_sampled[v] += sampled_mass_row(s, f, c, ms);
+        sums.support[v] += geom[f].area / 3;
+        const double* local = moments.rows.row(static_cast<Eigen::Index>(3 * f + size_t(c))).data();
+        for (Eigen::Index q = 0; q < K; ++q) row[q] += local[q];
+        if (!use_cv) continue;
+        for (int c2 = 0; c2 < 3; ++c2) {
+          const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0) - ms[c2];
+          const double* p = prior.row(tri[c2]).data();
+          for (Eigen::Index q = 0; q < K; ++q) row[q] += coeff * p[q];
+        }
       }
-      continue;
-    }
-    if (!face_has_samples(s, f)) continue;
-    double ls[3] = {0, 0, 0}, ms[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-    for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) {
-      const auto r = static_cast<Eigen::Index>(k);
-      for (int c = 0; c < 3; ++c) {
-        const double wh = s.weight[k] * s.barycentric(r, c);
-        ls[c] += wh;
-        for (int c2 = 0; c2 < 3; ++c2) ms[c][c2] += wh * s.barycentric(r, c2);
-      }
-    }
-    for (int c = 0; c < 3; ++c) {
-      sums.lumped_analytic[tri[c]] += geom[f].area / 3;
-      sums.lumped_sampled[tri[c]] += ls[c];
-      sums.support[tri[c]] += geom[f].area / 3;
-      double* row = sums.b.row(tri[c]).data();
-      const double* local = moments.rows.row(static_cast<Eigen::Index>(3 * f + size_t(c))).data();
-      for (Eigen::Index q = 0; q < K; ++q) row[q] += local[q];
-      if (!use_cv) continue;
-      for (int c2 = 0; c2 < 3; ++c2) {
-        const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0) - ms[c][c2];
-        const double* p = prior.row(tri[c2]).data();
-        for (Eigen::Index q = 0; q < K; ++q) row[q] += coeff * p[q];
-      }
-    }
-  }
+  });
   return sums;
+}
+
+// Whether every value is finite, by row blocks in parallel: one core's pass over an armadillo's
+// moments takes a tenth of a second.
+bool all_finite(const RowMatrixXd& m, int threads) {
+  std::atomic<bool> ok{true};
+  parallel_range(m.rows(), threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    bool good = true;
+    for (const double* p = m.data() + r.begin() * m.cols(); p != m.data() + r.end() * m.cols(); ++p) good &= std::abs(*p) <= DBL_MAX;
+    if (!good) ok = false;
+  });
+  return ok;
 }
 
 void check_fit_inputs(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments, const RowMatrixXd& prior,
@@ -418,7 +523,7 @@ void check_fit_inputs(const Mesh& mesh, const SurfaceSamples& s, const FaceMomen
   if (prior.rows() != V || prior.cols() != moments.rows.cols())
     throw InputError("fit: the prior needs one row per vertex and a column per value");
   if (!(o.alpha >= 0) || !std::isfinite(o.alpha)) throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.alpha));
-  if (!moments.rows.allFinite() || !prior.allFinite()) throw InputError("fit: non-finite sample values");
+  if (!all_finite(moments.rows, o.threads) || !all_finite(prior, o.threads)) throw InputError("fit: non-finite sample values");
   check_samples(mesh, s);
   if (static_cast<size_t>(moments.rows.rows()) != 3 * mesh.num_faces()) throw InputError("fit: three rows of moments per face expected");
 }
@@ -440,59 +545,125 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const Stopwatch clock;
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   const Eigen::Index K = moments.rows.cols();
-  const std::vector<FaceGeometry> geom = all_face_geometry(mesh);
+  const std::vector<FaceGeometry> geom = all_face_geometry(mesh, o.threads);
   FaceSums sums = sum_faces(mesh, s, geom, moments, prior, o);
   const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? sums.lumped_analytic : sums.lumped_sampled;
   // A vertex is free when its lumped mass is a meaningful share of a typical one; the others keep
   // their prior, and their columns move to the right-hand side.
   const double typical = lumped.sum() / static_cast<double>(std::max<Eigen::Index>(V, 1));
   FitSystem sys;
-  sys.slot.assign(static_cast<size_t>(V), -1);
-  Eigen::Index n = 0;
-  for (Eigen::Index i = 0; i < V; ++i)
-    if (lumped[i] > 1e-12 * typical && sums.support[i] > 1e-12 * typical) sys.slot[size_t(i)] = n++;
-  if (n == V) {
-    sys.rhs.swap(sums.b);  // every vertex free, the common case: no copy
-  } else {
-    sys.rhs.resize(n, K);
-    for (Eigen::Index i = 0; i < V; ++i)
+  std::vector<char> free(static_cast<size_t>(V));
+  for (Eigen::Index i = 0; i < V; ++i) free[size_t(i)] = lumped[i] > 1e-12 * typical && sums.support[i] > 1e-12 * typical;
+  const VertexCorners corners = vertex_corners(mesh);
+  std::vector<uint32_t> order;
+  sys.slot = breadth_first_slots(mesh, corners, free, order);
+  const auto n = static_cast<Eigen::Index>(order.size());
+  sys.rhs.resize(n, K);
+  parallel_range(V, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index i = r.begin(); i < r.end(); ++i)
       if (sys.slot[size_t(i)] >= 0) sys.rhs.row(sys.slot[size_t(i)]) = sums.b.row(i);
-  }
+  });
   // Straight into the final pattern: no triplets, whose memory costs more than their arithmetic.
   const bool edge_term = o.alpha > 0 && o.regularizer == Regularizer::Edge;
   const EdgePairs edges = edge_term ? interior_edge_pairs(mesh) : EdgePairs();
   sys.matrix = system_pattern(mesh, sys.slot, n, edge_term ? &edges : nullptr, o.threads);
+  // The interior edges' blocks.
+  const double floor = area_floor(geom);
+  std::vector<EdgeBlock> blocks(edges.size());
+  parallel_range(edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t e = r.begin(); e < r.end(); ++e) blocks[e] = edge_block(mesh, geom, edges[e], floor, o.alpha);
+  });
+  // Each vertex's (edge, corner of the block) pairs, in increasing edge order.
+  std::vector<uint32_t> edge_begin(edge_term ? size_t(V) + 1 : 0, 0), edge_corner;
+  if (edge_term) {
+    for (const EdgeBlock& b : blocks)
+      if (b.used)
+        for (uint32_t v : b.idx) ++edge_begin[v + 1];
+    for (size_t v = 0; v < size_t(V); ++v) edge_begin[v + 1] += edge_begin[v];
+    edge_corner.resize(edge_begin.back());
+    std::vector<uint32_t> end(edge_begin.begin(), edge_begin.end() - 1);
+    for (uint32_t e = 0; e < blocks.size(); ++e)
+      if (blocks[e].used)
+        for (uint32_t i = 0; i < 4; ++i) edge_corner[end[blocks[e].idx[i]]++] = 4 * e + i;
+  }
+  // Row by row, each from its vertex's corners (faces in increasing order: the mass, then the
+  // gradient term) or edges, so each entry sums its terms in the order of one serial pass over
+  // the faces or edges and the values do not depend on the number of threads.
   const int* outer = sys.matrix.outerIndexPtr();
   const int* inner = sys.matrix.innerIndexPtr();
   double* value = sys.matrix.valuePtr();
-  auto sink = [&](uint32_t i, uint32_t j, double v) {
-    const Eigen::Index si = sys.slot[i], sj = sys.slot[j];
-    if (si < 0) return;
-    if (sj < 0) {
-      sys.rhs.row(si) -= v * prior.row(j);
-      return;
+  // Per worker, each column's position in the current row (-1 elsewhere).
+  tbb::enumerable_thread_specific<std::vector<int>> positions([n] { return std::vector<int>(size_t(n), -1); });
+  parallel_range(n, o.threads, Eigen::Index(1024), [&](const tbb::blocked_range<Eigen::Index>& range) {
+    std::vector<int>& pos = positions.local();
+    for (Eigen::Index si = range.begin(); si < range.end(); ++si) {
+      const uint32_t v = order[size_t(si)];
+      double* rhs = sys.rhs.row(si).data();
+      for (int k = outer[si]; k < outer[si + 1]; ++k) pos[size_t(inner[k])] = k;
+      // Entry (si, j) += x, or to the right-hand side when j is fixed at its prior.
+      auto add = [&](uint32_t j, double x) {
+        const Eigen::Index sj = sys.slot[j];
+        if (sj < 0) {
+          const double* p = prior.row(j).data();
+          for (Eigen::Index q = 0; q < K; ++q) rhs[q] -= x * p[q];
+          return;
+        }
+        const int k = pos[size_t(sj)];
+        if (k < 0) throw SolverError("fit: internal error: an entry outside the system's pattern");
+        value[k] += x;
+      };
+      const uint32_t* first = corners.corner.data() + corners.begin[v];
+      const uint32_t* last = corners.corner.data() + corners.begin[v + 1];
+      for (const uint32_t* h = first; h != last; ++h) {
+        const size_t f = *h / 3;
+        const int c = int(*h % 3);
+        const bool interpolated = face_interpolated(s, f);
+        if (!interpolated && !face_has_samples(s, f)) continue;
+        const Triangle& tri = mesh.triangles[f];
+        if (o.mass == MassMatrix::Analytic || interpolated) {  // an interpolated face's data is exact
+          for (int j = 0; j < 3; ++j) add(tri[j], geom[f].area / (j == c ? 6 : 12));
+        } else {
+          double row[3];
+          sampled_mass_row(s, f, c, row);
+          for (int j = 0; j < 3; ++j) add(tri[j], row[j]);
+        }
+      }
+      if (o.alpha > 0 && !edge_term)
+        for (const uint32_t* h = first; h != last; ++h) {
+          const size_t f = *h / 3;
+          const int c = int(*h % 3);
+          if (!(geom[f].area > floor)) continue;
+          for (int j = 0; j < 3; ++j) add(mesh.triangles[f][j], o.alpha * 0.25 * geom[f].e[c].dot(geom[f].e[j]));
+        }
+      if (edge_term)
+        for (uint32_t k = edge_begin[v]; k < edge_begin[v + 1]; ++k) {
+          const EdgeBlock& b = blocks[edge_corner[k] / 4];
+          const uint32_t i = edge_corner[k] % 4;
+          for (int j = 0; j < 4; ++j) add(b.idx[j], b.w * b.q[i] * b.q[j]);
+        }
+      for (int k = outer[si]; k < outer[si + 1]; ++k) pos[size_t(inner[k])] = -1;
     }
-    const int* last = inner + outer[si + 1];
-    const int* k = std::lower_bound(inner + outer[si], last, static_cast<int>(sj));
-    if (k == last || *k != sj) throw SolverError("fit: internal error: an entry outside the system's pattern");
-    value[k - inner] += v;
-  };
-  emit_mass(mesh, geom, s, o.mass, 1.0, sink);
-  if (o.alpha > 0) {
-    if (edge_term) emit_edge(mesh, geom, edges, o.alpha, sink);
-    else emit_gradient(mesh, geom, o.alpha, sink);
-  }
+  });
   // Jacobi scaling: a unit diagonal makes the factor's condition estimate mean "digits lost"
   // whatever the mesh's units and the spread of its triangle sizes, and is CG's preconditioner.
   sys.scale.resize(n);
   sys.lumped.resize(n);
   for (Eigen::Index i = 0; i < V; ++i)
     if (sys.slot[size_t(i)] >= 0) sys.lumped[sys.slot[size_t(i)]] = lumped[i];
-  const Eigen::VectorXd diag = sys.matrix.diagonal();
-  for (Eigen::Index i = 0; i < n; ++i) sys.scale[i] = diag[i] > 0 ? 1 / std::sqrt(diag[i]) : 1.0;
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (RowSparseMatrixd::InnerIterator it(sys.matrix, i); it; ++it) it.valueRef() *= sys.scale[i] * sys.scale[it.col()];
-  sys.rhs = sys.scale.asDiagonal() * sys.rhs;
+  parallel_range(n, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
+      double d = 0;
+      for (int k = outer[i]; k < outer[i + 1]; ++k)
+        if (inner[k] == i) d = value[k];
+      sys.scale[i] = d > 0 ? 1 / std::sqrt(d) : 1.0;
+    }
+  });
+  parallel_range(n, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
+      for (int k = outer[i]; k < outer[i + 1]; ++k) value[k] *= sys.scale[i] * sys.scale[inner[k]];
+      for (Eigen::Index q = 0; q < K; ++q) sys.rhs(i, q) *= sys.scale[i];
+    }
+  });
   if (stats) {
     stats->unknowns = mesh.num_vertices();
     stats->unsupported = static_cast<size_t>(V - n);
@@ -512,6 +683,25 @@ class FitSystemSolver::Cholesky : public Eigen::CholmodSupernodalLLT<SparseMatri
   }
 };
 
+namespace {
+
+// A row is stiff when the mass holds under 5% of its diagonal (the analytic mass's diagonal is half
+// the lumped mass). Measured with `prtsub bench SCENE --solve` on the shared scenes: the three
+// where CG stalled have 2.1% (sibenik), 11.8% (conference) and 18.6% (house_on_site) of their
+// rows stiff; of those where it converged, mori_knob has 3.1% (38 iterations), the rest under 0.1%.
+constexpr double kStiffShare = 0.01;
+// CHOLMOD for a stiff system when its factor holds at most this many times the system's
+// non-zeros (both triangles): 3× on conference; a 3-D scan's is 10× (armadillo).
+constexpr double kCheapFill = 6;
+
+double stiff_share(const FitSystem& sys) {
+  size_t stiff = 0;
+  for (Eigen::Index i = 0; i < sys.scale.size(); ++i) stiff += 0.5 * sys.lumped[i] * sys.scale[i] * sys.scale[i] < 0.05;
+  return sys.scale.size() ? double(stiff) / double(sys.scale.size()) : 0.0;
+}
+
+}  // namespace
+
 FitSystemSolver::FitSystemSolver(const FitSystem& system, const FitOptions& options) : system_(system), options_(options) {}
 FitSystemSolver::~FitSystemSolver() = default;
 
@@ -520,13 +710,21 @@ FitSystemSolver::~FitSystemSolver() = default;
 // that turned sample noise into errors of 2000% with the sampled mass and 2 samples per
 // triangle; the analytic mass matrix, Jacobi-scaled, stays far above it even with 1e-4° slivers.)
 // If it fails, add λ·D (D the lumped mass) with λ = 1e-9, 1e-6, 1e-3, 1: the smallest that holds.
-void FitSystemSolver::factorize(FitStats& stats) {
+void FitSystemSolver::analyze(FitStats& stats) {
   const Stopwatch clock;
-  const Eigen::Index n = system_.matrix.rows();
-  const SparseMatrixd lower = system_.matrix.triangularView<Eigen::Lower>();
+  lower_ = system_.matrix.triangularView<Eigen::Lower>();
   cholesky_ = std::make_unique<Cholesky>();
   cholesky_->cholmod().print = 0;  // failures are ours to report, in one line
-  cholesky_->analyzePattern(lower);
+  cholesky_->analyzePattern(lower_);
+  predicted_factor_entries_ = cholesky_->cholmod().lnz;
+  stats.seconds_factor += clock.total();
+}
+
+void FitSystemSolver::factorize(FitStats& stats) {
+  if (!cholesky_) analyze(stats);
+  const Stopwatch clock;
+  const Eigen::Index n = system_.matrix.rows();
+  const SparseMatrixd& lower = lower_;
   const double kMinRcond = 1e-7;
   auto holds = [&]() { return cholesky_->info() == Eigen::Success && cholesky_->rcond() > kMinRcond; };
   cholesky_->factorize(lower);
@@ -541,6 +739,7 @@ void FitSystemSolver::factorize(FitStats& stats) {
   }
   if (!ok) throw SolverError("fit: the least-squares system could not be factorised even when pulled towards the point samples");
   factor_entries_ = cholesky_->factor_entries();
+  factored_ = true;
   stats.seconds_factor += clock.total();
 }
 
@@ -555,7 +754,22 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
   // Conjugate gradients first where the system is known to be well conditioned: the analytic
   // mass matrix, Jacobi-scaled, has eigenvalues in [1/2, 2] whatever the mesh. Started at the
   // prior, they need a few dozen passes over the matrix; a Cholesky factor of a 3-D mesh fills in.
-  if (n > 0 && !cholesky_ && options_.solver == FitSolver::Auto && options_.mass == MassMatrix::Analytic) {
+  // The solver is chosen before any iteration is spent. Where the regulariser carries nearly all
+  // of many rows' diagonals (slivers beside large faces), the scaled system is stiff and CG
+  // crawls; such meshes (buildings) are mostly planar, and their Cholesky factor fills in little.
+  // So: few stiff rows, CG; many, CHOLMOD's symbolic analysis (reused by the factorisation) and
+  // CHOLMOD if its factor is small, CG (with the stall check as a last resort) if not.
+  bool iterate = n > 0 && !factored_ && options_.solver == FitSolver::Auto && options_.mass == MassMatrix::Analytic;
+  if (iterate) {
+    stats.stiff_share = stiff_share(sys);
+    if (stats.stiff_share >= kStiffShare) {
+      if (!cholesky_) analyze(stats);
+      stats.predicted_factor_entries = size_t(predicted_factor_entries_);
+      iterate = predicted_factor_entries_ > kCheapFill * double(sys.matrix.nonZeros());
+    }
+    clock.lap();
+  }
+  if (iterate) {
     RowMatrixXd y(n, K);
     for (size_t i = 0; i < slot.size(); ++i)
       if (slot[i] >= 0) y.row(slot[i]) = prior.row(static_cast<Eigen::Index>(i)) / sys.scale[slot[i]];
@@ -575,7 +789,7 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
     stats.seconds_factor += clock.lap();
   }
   if (n > 0) {
-    if (!cholesky_) factorize(stats);
+    if (!factored_) factorize(stats);
     clock.lap();
     stats.solver = "cholmod";
     stats.stabilizer = stabilizer_;
@@ -711,7 +925,7 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     x = prior;
   } else if (o.method == FitMethod::Average) {
     const Stopwatch clock;
-    const FaceSums sums = sum_faces(mesh, s, all_face_geometry(mesh), moments, prior, o);
+    const FaceSums sums = sum_faces(mesh, s, all_face_geometry(mesh, o.threads), moments, prior, o);
     const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? sums.lumped_analytic : sums.lumped_sampled;
     const double typical = lumped.sum() / static_cast<double>(std::max<size_t>(mesh.num_vertices(), 1));
     std::vector<char> free(mesh.num_vertices());

@@ -48,7 +48,10 @@ struct FitOptions {
   //! sampling error scales with f − g_prior instead of f (off: the paper's plain estimate).
   bool control_variate = true;
   FitSolver solver = FitSolver::Auto;
-  double cg_tolerance = 1e-10;  //!< relative residual of the Jacobi-scaled system, per column
+  //! CG's relative residual per column (of the Jacobi-scaled system). 1e-6 moves no stored value
+  //! by more than 3e-5 of the largest from the exact solve, far below the samples' noise
+  //! (bench/fit_tolerance.sh), in about 60% of the iterations 1e-10 takes.
+  double cg_tolerance = 1e-6;
   int cg_max_iterations = 100;  //!< beyond this (or when CG predicts it), CHOLMOD takes over
   int threads = 0;     //!< for the iterative solve; 0: every core (the result does not depend on it)
   //! Keep of each vertex's correction (fit − prior) the share its noise allows: where the
@@ -63,6 +66,10 @@ struct FitStats {
   size_t unsupported = 0;          //!< vertices no sampled face touches: they keep the prior
   size_t system_nonzeros = 0;      //!< of A + αR (both triangles)
   size_t factor_nonzeros = 0;      //!< of the Cholesky factor L (0 when CG solved it)
+  //! share of the unknowns whose diagonal is over 95% regulariser: from 1%, the system is stiff
+  //! and CHOLMOD's symbolic analysis decides between it and CG
+  double stiff_share = 0;
+  size_t predicted_factor_entries = 0;  //!< that analysis's count, when it ran (0 otherwise)
   std::string solver;              //!< "cg" or "cholmod": what produced the values
   int cg_iterations = 0;           //!< of the slowest column, also when CG gave up
   double solve_memory_mib = 0;     //!< system plus factor (or CG's vectors) plus right-hand sides, as stored
@@ -128,9 +135,10 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& samples, c
                               const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
 
 //! Solves a FitSystem for all K right-hand sides at once. With the analytic mass matrix and
-//! FitSolver::Auto: block conjugate gradients started at the prior (the scaled system is well
-//! conditioned on any mesh). Otherwise, or when CG stalls: one CHOLMOD supernodal Cholesky
-//! factorisation, kept for every later solve. A singular system (α = 0 with a mass matrix that
+//! FitSolver::Auto: block conjugate gradients started at the prior (the scaled mass is well
+//! conditioned on any mesh), unless the regulariser makes the system stiff (FitStats::stiff_share)
+//! and CHOLMOD's symbolic analysis finds a small factor; chosen before any iteration. Otherwise,
+//! or if CG stalls after all: one CHOLMOD supernodal Cholesky factorisation, kept for every later solve. A singular system (α = 0 with a mass matrix that
 //! cannot see a vertex) is stabilised by a pull towards the prior, λ·D(x − prior), with the
 //! smallest λ that factorises; FitStats says so. Keeps a reference to `system`.
 class FitSystemSolver {
@@ -146,10 +154,14 @@ class FitSystemSolver {
 
  private:
   class Cholesky;
+  void analyze(FitStats& stats);
   void factorize(FitStats& stats);
   const FitSystem& system_;
   FitOptions options_;
   std::unique_ptr<Cholesky> cholesky_;
+  SparseMatrixd lower_;
+  bool factored_ = false;
+  double predicted_factor_entries_ = 0;
   double stabilizer_ = 0;
   size_t factor_entries_ = 0;
 };
