@@ -329,58 +329,95 @@ size_t emit_edge(const Mesh& mesh, const std::vector<FaceGeometry>& g, const Edg
   return used;
 }
 
-// The sparsity of the system over the free vertices (slot ≥ 0), both triangles, columns sorted,
-// values zero: every pair of vertices in a face, and with the edge regulariser the two vertices
-// opposite an interior edge. A superset of what the terms fill is harmless.
-RowSparseMatrixd system_pattern(const Mesh& mesh, const std::vector<Eigen::Index>& slot, Eigen::Index n,
-                                const EdgePairs* edges, int threads) {
-  auto opposite = [&](uint32_t he) { return slot[mesh.triangles[he / 3][he % 3]]; };
-  // Rows with repeats, by counting: each face gives each of its free corners 3 columns.
-  std::vector<Eigen::Index> start(static_cast<size_t>(n) + 1, 0);
-  for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c)
-      if (slot[t[c]] >= 0) start[size_t(slot[t[c]]) + 1] += 3;
-  if (edges)
-    for (const auto& e : *edges)
-      if (opposite(e[0]) >= 0 && opposite(e[1]) >= 0) ++start[size_t(opposite(e[0])) + 1], ++start[size_t(opposite(e[1])) + 1];
-  for (size_t i = 0; i < size_t(n); ++i) start[i + 1] += start[i];
-  std::vector<int> col(static_cast<size_t>(start.back()));
-  std::vector<Eigen::Index> end(start.begin(), start.end() - 1);
-  for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) {
-      const Eigen::Index r = slot[t[c]];
-      if (r < 0) continue;
-      for (int c2 = 0; c2 < 3; ++c2) col[size_t(end[size_t(r)]++)] = static_cast<int>(slot[t[c2]]);  // -1: fixed
-    }
-  if (edges)
-    for (const auto& e : *edges) {
-      const Eigen::Index u = opposite(e[0]), v = opposite(e[1]);
-      if (u < 0 || v < 0) continue;
-      col[size_t(end[size_t(u)]++)] = static_cast<int>(v);
-      col[size_t(end[size_t(v)]++)] = static_cast<int>(u);
-    }
-  parallel_range(n, threads, Eigen::Index(512), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
-      int* first = col.data() + start[size_t(i)];
-      int* last = col.data() + end[size_t(i)];
+// The used blocks by their first row (the least slot of their free vertices; counting sort, so
+// ties keep edge order): a row's blocks then lie near each other and near its neighbours' rows,
+// as the breadth-first numbering does for the rows themselves.
+std::vector<EdgeBlock> in_row_order(std::vector<EdgeBlock> blocks, const std::vector<Eigen::Index>& slot, Eigen::Index n) {
+  auto first_row = [&](const EdgeBlock& b) {
+    Eigen::Index r = n;
+    for (uint32_t v : b.idx)
+      if (slot[v] >= 0) r = std::min(r, slot[v]);
+    return r;
+  };
+  std::vector<uint32_t> begin(size_t(n) + 2, 0);
+  for (const EdgeBlock& b : blocks)
+    if (b.used) ++begin[size_t(first_row(b)) + 1];
+  for (size_t r = 0; r + 1 < begin.size(); ++r) begin[r + 1] += begin[r];
+  std::vector<EdgeBlock> sorted(begin.back());
+  for (const EdgeBlock& b : blocks)
+    if (b.used) sorted[begin[size_t(first_row(b))]++] = b;
+  return sorted;
+}
+
+// Each vertex's (edge block, corner of the block) pairs 4e + i, in increasing block order.
+struct VertexEdges {
+  std::vector<uint32_t> begin;  // #V + 1 (empty without the edge term)
+  std::vector<uint32_t> pair;
+};
+
+VertexEdges vertex_edges(size_t V, const std::vector<EdgeBlock>& blocks) {
+  VertexEdges ve;
+  if (blocks.empty()) return ve;
+  ve.begin.assign(V + 1, 0);
+  for (const EdgeBlock& b : blocks)
+    if (b.used)
+      for (uint32_t v : b.idx) ++ve.begin[v + 1];
+  for (size_t v = 0; v < V; ++v) ve.begin[v + 1] += ve.begin[v];
+  ve.pair.resize(ve.begin.back());
+  std::vector<uint32_t> end(ve.begin.begin(), ve.begin.end() - 1);
+  for (uint32_t e = 0; e < blocks.size(); ++e)
+    if (blocks[e].used)
+      for (uint32_t i = 0; i < 4; ++i) ve.pair[end[blocks[e].idx[i]]++] = 4 * e + i;
+  return ve;
+}
+
+// The sparsity of the system, row si for vertex order[si], both triangles, columns sorted, values
+// zero: the free vertices of every face around it and of every edge block it is in (a superset of
+// what the terms fill is harmless). Rows in parallel, each into a slice sized by a bound.
+RowSparseMatrixd system_pattern(const Mesh& mesh, const VertexCorners& corners, const VertexEdges& edges,
+                                const std::vector<EdgeBlock>& blocks, const std::vector<uint32_t>& order,
+                                const std::vector<Eigen::Index>& slot, int threads) {
+  const auto n = static_cast<Eigen::Index>(order.size());
+  std::vector<size_t> bound(size_t(n) + 1, 0);
+  for (Eigen::Index si = 0; si < n; ++si) {
+    const uint32_t v = order[size_t(si)];
+    bound[size_t(si) + 1] = bound[size_t(si)] + 3 * (corners.begin[v + 1] - corners.begin[v]) +
+                            (edges.begin.empty() ? 0 : 4 * (edges.begin[v + 1] - edges.begin[v]));
+  }
+  std::vector<int> col(bound.back());
+  std::vector<int> length(static_cast<size_t>(n), 0);
+  // Per worker, the row each column was last taken for: a row's candidates repeat 3-5 times.
+  tbb::enumerable_thread_specific<std::vector<Eigen::Index>> taken([n] { return std::vector<Eigen::Index>(size_t(n), -1); });
+  parallel_range(n, threads, Eigen::Index(1024), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    std::vector<Eigen::Index>& row_of = taken.local();
+    for (Eigen::Index si = r.begin(); si < r.end(); ++si) {
+      const uint32_t v = order[size_t(si)];
+      int* first = col.data() + bound[size_t(si)];
+      int* last = first;
+      auto take = [&](uint32_t u) {
+        const Eigen::Index c = slot[u];
+        if (c >= 0 && row_of[size_t(c)] != si) row_of[size_t(c)] = si, *last++ = static_cast<int>(c);
+      };
+      for (uint32_t k = corners.begin[v]; k < corners.begin[v + 1]; ++k)
+        for (uint32_t u : mesh.triangles[corners.corner[k] / 3]) take(u);
+      if (!edges.begin.empty())
+        for (uint32_t k = edges.begin[v]; k < edges.begin[v + 1]; ++k)
+          for (uint32_t u : blocks[edges.pair[k] / 4].idx) take(u);
       std::sort(first, last);
-      last = std::unique(first, last);
-      if (first < last && *first < 0) last = std::move(first + 1, last, first);  // the fixed vertices' -1
-      end[size_t(i)] = last - first;
+      length[size_t(si)] = static_cast<int>(last - first);
     }
   });
   RowSparseMatrixd m(n, n);
-  Eigen::Index nnz = 0;
-  for (Eigen::Index i = 0; i < n; ++i) nnz += end[size_t(i)];
-  m.resizeNonZeros(nnz);
-  Eigen::Index k = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    m.outerIndexPtr()[i] = static_cast<int>(k);
-    std::copy_n(col.data() + start[size_t(i)], end[size_t(i)], m.innerIndexPtr() + k);
-    k += end[size_t(i)];
-  }
-  m.outerIndexPtr()[n] = static_cast<int>(k);
-  std::fill_n(m.valuePtr(), nnz, 0.0);
+  int* outer = m.outerIndexPtr();
+  outer[0] = 0;
+  for (Eigen::Index si = 0; si < n; ++si) outer[si + 1] = outer[si] + length[size_t(si)];
+  m.resizeNonZeros(outer[n]);
+  parallel_range(n, threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index si = r.begin(); si < r.end(); ++si) {
+      std::copy_n(col.data() + bound[size_t(si)], length[size_t(si)], m.innerIndexPtr() + outer[si]);
+      std::fill_n(m.valuePtr() + outer[si], length[size_t(si)], 0.0);
+    }
+  });
   return m;
 }
 
@@ -566,26 +603,14 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   // Straight into the final pattern: no triplets, whose memory costs more than their arithmetic.
   const bool edge_term = o.alpha > 0 && o.regularizer == Regularizer::Edge;
   const EdgePairs edges = edge_term ? interior_edge_pairs(mesh) : EdgePairs();
-  sys.matrix = system_pattern(mesh, sys.slot, n, edge_term ? &edges : nullptr, o.threads);
-  // The interior edges' blocks.
   const double floor = area_floor(geom);
   std::vector<EdgeBlock> blocks(edges.size());
   parallel_range(edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t e = r.begin(); e < r.end(); ++e) blocks[e] = edge_block(mesh, geom, edges[e], floor, o.alpha);
   });
-  // Each vertex's (edge, corner of the block) pairs, in increasing edge order.
-  std::vector<uint32_t> edge_begin(edge_term ? size_t(V) + 1 : 0, 0), edge_corner;
-  if (edge_term) {
-    for (const EdgeBlock& b : blocks)
-      if (b.used)
-        for (uint32_t v : b.idx) ++edge_begin[v + 1];
-    for (size_t v = 0; v < size_t(V); ++v) edge_begin[v + 1] += edge_begin[v];
-    edge_corner.resize(edge_begin.back());
-    std::vector<uint32_t> end(edge_begin.begin(), edge_begin.end() - 1);
-    for (uint32_t e = 0; e < blocks.size(); ++e)
-      if (blocks[e].used)
-        for (uint32_t i = 0; i < 4; ++i) edge_corner[end[blocks[e].idx[i]]++] = 4 * e + i;
-  }
+  blocks = in_row_order(std::move(blocks), sys.slot, n);
+  const VertexEdges vertex_blocks = vertex_edges(size_t(V), blocks);
+  sys.matrix = system_pattern(mesh, corners, vertex_blocks, blocks, order, sys.slot, o.threads);
   // Row by row, each from its vertex's corners (faces in increasing order: the mass, then the
   // gradient term) or edges, so each entry sums its terms in the order of one serial pass over
   // the faces or edges and the values do not depend on the number of threads.
@@ -636,9 +661,9 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
           for (int j = 0; j < 3; ++j) add(mesh.triangles[f][j], o.alpha * 0.25 * geom[f].e[c].dot(geom[f].e[j]));
         }
       if (edge_term)
-        for (uint32_t k = edge_begin[v]; k < edge_begin[v + 1]; ++k) {
-          const EdgeBlock& b = blocks[edge_corner[k] / 4];
-          const uint32_t i = edge_corner[k] % 4;
+        for (uint32_t k = vertex_blocks.begin[v]; k < vertex_blocks.begin[v + 1]; ++k) {
+          const EdgeBlock& b = blocks[vertex_blocks.pair[k] / 4];
+          const uint32_t i = vertex_blocks.pair[k] % 4;
           for (int j = 0; j < 4; ++j) add(b.idx[j], b.w * b.q[i] * b.q[j]);
         }
       for (int k = outer[si]; k < outer[si + 1]; ++k) pos[size_t(inner[k])] = -1;
