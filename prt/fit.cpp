@@ -279,8 +279,8 @@ EdgePairs interior_edge_pairs(const Mesh& mesh) {
 // One interior edge's 4×4 block w·q qᵀ over the four vertices of its two faces; `used` is false
 // when a face is degenerate or the two faces do not span four distinct vertices.
 struct EdgeBlock {
-  uint32_t idx[4];
-  double q[4];
+  uint32_t idx[4] = {0, 0, 0, 0};
+  double q[4] = {0, 0, 0, 0};
   double w = 0;
   bool used = false;
 };
@@ -290,7 +290,6 @@ EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const
   EdgeBlock b;
   double area[2];
   int n = 0;
-  std::fill_n(b.q, 4, 0.0);
   for (int side = 0; side < 2; ++side) {
     const uint32_t he = edge[size_t(side)];
     const size_t f = he / 3;
@@ -304,6 +303,7 @@ EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const
       const uint32_t v = mesh.triangles[f][i];
       int slot = 0;
       while (slot < n && b.idx[slot] != v) ++slot;
+      if (slot == 4) return b;  // not two faces on one edge
       if (slot == n) b.idx[n++] = v;
       b.q[slot] += fg.n.cross(fg.e[i]).dot(m) / (2 * fg.area);  // ∇h_v · m
     }
