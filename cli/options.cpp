@@ -69,6 +69,10 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--pilot-rays", "R", "fit, pilot: rays per pilot sample", &bake.pilot.rays, 2, 1 << 20);
   args.option("--pilot-area-share", "A", "fit, pilot: share of a sampled face's density that follows its area alone (the rest\n"
               "follows its estimated interpolation error)", &bake.pilot.area_share, 0.0, 1.0);
+  args.option("--pilot-first-share", "S", "fit, pilot: below 1, trace this share of the pilot first and the rest only on faces\n"
+              "the first stage could not clear", &bake.pilot.first_share, 0.0, 1.0);
+  args.option("--pilot-first-significance", "Z", "fit, pilot, two stages: standard errors a face's first-stage pool must exceed\n"
+              "for the second stage to trace its other samples", &bake.pilot.first_significance, -1e6, 1e6);
   args.option("--pilot-rings", "N", "fit, pilot: each face pools the pilot samples within N vertex rings", &bake.pilot.rings, 1, 8);
   args.option("--pilot-significance", "Z", "fit, pilot: standard errors a ring's excess residual must exceed to get samples",
               &bake.pilot.significance, 0.0, 1e6);

@@ -63,6 +63,7 @@ void record_sample_spread(Report& r, const FitData& data) {
   r.set("sample_allocation", sample_allocation_name(data.allocation));
   if (data.allocation != SampleAllocation::Pilot) return;
   r.set("pilot_samples", data.plan.pilot_samples);
+  r.set("pilot_samples_drawn", data.plan.pilot_drawn);
   r.set("pilot_rays", data.plan.rays);
   r.set("seconds_pilot", data.plan.seconds);
   r.set("sampled_faces", data.plan.sampled_faces);
@@ -199,7 +200,7 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"  fit:        least squares, {regularizer} regulariser, alpha {alpha}, {mass} mass; {samples} surface "
                      "samples ({sample_rays} rays each, {seconds_samples:3} s)"});
     if (r.has("pilot_samples"))
-      r.print(stdout, {"              pilot: {pilot_samples} samples ({pilot_rays} rays, {seconds_pilot:3} s) found {sampled_faces} "
+      r.print(stdout, {"              pilot: {pilot_samples} of {pilot_samples_drawn} samples traced ({pilot_rays} rays, {seconds_pilot:3} s) found {sampled_faces} "
                        "faces where interpolation fails; {interpolated_faces} left to it",
                        "              faces by samples: 0: {faces_with_samples_0}, 1: {faces_with_samples_1}, 2-3: "
                        "{faces_with_samples_2_3}, 4-7: {faces_with_samples_4_7}, 8-15: {faces_with_samples_8_15}, 16-31: "

@@ -20,6 +20,12 @@
 // allocation by the estimated error, mixed with a uniform share so a face whose pilot missed a
 // shadow still gets its samples.
 //
+// In two stages (the default), half the pilot samples (every other, by index: spread over the
+// faces in order) are traced first and every face is tested on them at a lower bar (one standard
+// error); only the faces that pass it, or whose pool holds no first-stage sample, have the rest of
+// their samples traced and face the full test. On a dense scan, where interpolation serves almost
+// every face, the pilot then costs little more than its first half.
+//
 // The pilot's own samples are not reused in the fit: its allocation would depend on their
 // values, and the fit's moments would no longer be unbiased.
 #include "prtsub/prt/sample_plan.h"
@@ -68,57 +74,90 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   const Eigen::Index K = prior.cols();
   if (rays.order * rays.order != K) throw InputError("sample plan: the prior's columns do not match the SH order");
 
-  // Each sample's excess d = ‖r‖² − v and noise v, traced in groups of 64.
+  // The samples of the first stage: every one, or a systematic share of them (by index, so
+  // spread over the faces in order) when the pilot runs in two stages.
+  const bool two_stages = o.first_share > 0 && o.first_share < 1;
+  std::vector<char> traced(S, 0);
+  std::vector<size_t> first;
+  first.reserve(two_stages ? size_t(double(S) * o.first_share) + 1 : S);
+  for (size_t k = 0; k < S; ++k)
+    if (!two_stages || std::floor(double(k + 1) * o.first_share) > std::floor(double(k) * o.first_share)) first.push_back(k);
+
+  // Each traced sample's excess d = ‖r‖² − v and noise v. A stage traces its samples in groups
+  // of 64, each with its own stream (its index), so a sample's rays do not depend on the stage.
   std::vector<double> excess(S, 0.0), noise(S, 0.0);
-  std::vector<size_t> group_begin;
-  for (size_t k = 0; k < S; k += 64) group_begin.push_back(k);
-  group_begin.push_back(S);
   TransferStats stats;
   SamplePlan plan;
-  const size_t stride = o.holdout > 0 ? std::max<size_t>(1, (S + o.holdout - 1) / o.holdout) : 0;
+  // The hold-out: every stride-th sample of the first stage, which covers the whole surface.
+  const size_t stride = o.holdout > 0 ? std::max<size_t>(1, (first.size() + o.holdout - 1) / o.holdout) : 0;
   Holdout& held = plan.holdout;
-  const size_t n_held = stride > 0 ? (S + stride - 1) / stride : 0;
+  const size_t n_held = stride > 0 ? (first.size() + stride - 1) / stride : 0;
   held.face.resize(n_held), held.weight.resize(n_held), held.variance.resize(n_held);
   held.barycentric.resize(static_cast<Eigen::Index>(n_held), 3);
   held.values.resize(static_cast<Eigen::Index>(n_held), K);
-  shadowed_transfer_groups(
-      scene, pilot.points, pilot.normals, group_begin, to,
-      [&](size_t g, const double* values, const double* variance, size_t rows) {
-        Eigen::VectorXd r(K);
-        for (size_t j = 0; j < rows; ++j) {
-          const size_t k = group_begin[g] + j;
-          if (stride > 0 && k % stride == 0) {  // rows of distinct samples: no two threads share one
-            const auto h = static_cast<Eigen::Index>(k / stride);
-            held.face[size_t(h)] = pilot.face[k], held.weight[size_t(h)] = pilot.weight[k], held.variance[size_t(h)] = variance[j];
-            held.barycentric.row(h) = pilot.barycentric.row(static_cast<Eigen::Index>(k));
-            for (Eigen::Index q = 0; q < K; ++q) held.values(h, q) = static_cast<float>(values[j * size_t(K) + size_t(q)]);
+  auto trace = [&](const std::vector<size_t>& which, bool keep_holdout) {
+    const size_t n = which.size();
+    RowMatrixX3d points(static_cast<Eigen::Index>(n), 3), normals(static_cast<Eigen::Index>(n), 3), offsets(static_cast<Eigen::Index>(n), 3);
+    std::vector<uint64_t> streams(n);
+    for (size_t j = 0; j < n; ++j) {
+      const auto k = static_cast<Eigen::Index>(which[j]), r = static_cast<Eigen::Index>(j);
+      points.row(r) = pilot.points.row(k), normals.row(r) = pilot.normals.row(k), offsets.row(r) = pilot.offsets.row(k);
+      streams[j] = to.stream_offset + which[j];
+      traced[which[j]] = 1;
+    }
+    std::vector<size_t> group_begin;
+    for (size_t j = 0; j < n; j += 64) group_begin.push_back(j);
+    group_begin.push_back(n);
+    TransferOptions stage = to;
+    stage.streams = &streams;
+    TransferStats stage_stats;
+    shadowed_transfer_groups(
+        scene, points, normals, group_begin, stage,
+        [&](size_t g, const double* values, const double* variance, size_t rows) {
+          Eigen::VectorXd r(K);
+          for (size_t i = 0; i < rows; ++i) {
+            const size_t j = group_begin[g] + i, k = which[j];
+            if (keep_holdout && stride > 0 && j % stride == 0) {  // rows of distinct samples: no two threads share one
+              const auto h = static_cast<Eigen::Index>(j / stride);
+              held.face[size_t(h)] = pilot.face[k], held.weight[size_t(h)] = pilot.weight[k], held.variance[size_t(h)] = variance[i];
+              held.barycentric.row(h) = pilot.barycentric.row(static_cast<Eigen::Index>(k));
+              for (Eigen::Index q = 0; q < K; ++q) held.values(h, q) = static_cast<float>(values[i * size_t(K) + size_t(q)]);
+            }
+            const Triangle& t = mesh.triangles[pilot.face[k]];
+            double v = variance[i];
+            for (Eigen::Index q = 0; q < K; ++q) r[q] = values[i * size_t(K) + size_t(q)];
+            for (int c = 0; c < 3; ++c) {
+              const double h = pilot.barycentric(static_cast<Eigen::Index>(k), c);
+              r -= h * prior.row(t[c]).transpose();
+              v += h * h * prior_variance[t[c]];
+            }
+            noise[k] = v;
+            excess[k] = r.squaredNorm() - v;
           }
-          const Triangle& t = mesh.triangles[pilot.face[k]];
-          double v = variance[j];
-          for (Eigen::Index q = 0; q < K; ++q) r[q] = values[j * size_t(K) + size_t(q)];
-          for (int c = 0; c < 3; ++c) {
-            const double h = pilot.barycentric(static_cast<Eigen::Index>(k), c);
-            r -= h * prior.row(t[c]).transpose();
-            v += h * h * prior_variance[t[c]];
-          }
-          noise[k] = v;
-          excess[k] = r.squaredNorm() - v;
-        }
-      },
-      &stats, progress, &pilot.offsets);
+        },
+        &stage_stats, progress, &offsets);
+    stats.rays += stage_stats.rays;
+  };
+  trace(first, true);
 
-  // Per face: the sums of its samples' excess and squared noise.
+  // Per face: the sums of its traced samples' excess and squared noise.
   std::vector<double> face_sum(F, 0.0), face_v2(F, 0.0);
   std::vector<size_t> face_count(F, 0);
   std::vector<char> unknown(F, 0);  // a noise we could not estimate: sample to be safe
-  for (size_t k = 0; k < S; ++k) {
-    const size_t f = pilot.face[k];
-    if (!std::isfinite(noise[k]) || !std::isfinite(excess[k])) {
-      unknown[f] = 1;
-      continue;
+  auto sum_faces = [&]() {
+    std::fill(face_sum.begin(), face_sum.end(), 0.0), std::fill(face_v2.begin(), face_v2.end(), 0.0);
+    std::fill(face_count.begin(), face_count.end(), size_t(0)), std::fill(unknown.begin(), unknown.end(), 0);
+    for (size_t k = 0; k < S; ++k) {
+      if (!traced[k]) continue;
+      const size_t f = pilot.face[k];
+      if (!std::isfinite(noise[k]) || !std::isfinite(excess[k])) {
+        unknown[f] = 1;
+        continue;
+      }
+      face_sum[f] += excess[k], face_v2[f] += noise[k] * noise[k], ++face_count[f];
     }
-    face_sum[f] += excess[k], face_v2[f] += noise[k] * noise[k], ++face_count[f];
-  }
+  };
+  sum_faces();
   // Rounding: an exact estimate (an open point, whose transfer the control variate makes exact)
   // leaves residuals of ~1e-16 and no noise to weigh them against.
   double typical = 0;
@@ -137,34 +176,64 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     for (size_t f = 0; f < F; ++f)
       for (int c = 0; c < 3; ++c) vf[fill[mesh.triangles[f][c]]++] = f;
   }
-  plan.face_weight.assign(F, 0.0);
-  std::vector<double> raw(F, 0.0), area(F, 0.0);
-  std::vector<size_t> face_mark(F, SIZE_MAX), vertex_mark(V, SIZE_MAX), ring, next;
-  double weighted = 0, total_area = 0;
-  for (size_t f = 0; f < F; ++f) {
-    // Faces within `rings` rings: grow from f's corners, marking faces and vertices with f.
-    ring.assign(mesh.triangles[f].begin(), mesh.triangles[f].end());
-    for (uint32_t v : mesh.triangles[f]) vertex_mark[v] = f;
+  struct Pool {
     double sum = 0, v2 = 0, n = 0, sum1 = 0, n1 = 0;  // sum1, n1: the first ring's, for the density
     bool unsure = false;
+  };
+  std::vector<size_t> face_mark(F, SIZE_MAX), vertex_mark(V, SIZE_MAX), ring, next;
+  size_t pass = 0;  // marks are (pass, face) so that the second pass starts clean
+  auto pool = [&](size_t f) {
+    Pool p;
+    const size_t tag = pass * F + f;
+    ring.assign(mesh.triangles[f].begin(), mesh.triangles[f].end());
+    for (uint32_t v : mesh.triangles[f]) vertex_mark[v] = tag;
     for (int r = 0; r < std::max(1, o.rings); ++r) {
       next.clear();
       for (size_t v : ring)
         for (size_t j = vf_begin[v]; j < vf_begin[v + 1]; ++j) {
           const size_t g = vf[j];
-          if (face_mark[g] == f) continue;
-          face_mark[g] = f;
-          sum += face_sum[g], v2 += face_v2[g], n += static_cast<double>(face_count[g]);
-          unsure |= unknown[g] != 0;
+          if (face_mark[g] == tag) continue;
+          face_mark[g] = tag;
+          p.sum += face_sum[g], p.v2 += face_v2[g], p.n += static_cast<double>(face_count[g]);
+          p.unsure |= unknown[g] != 0;
           for (uint32_t u : mesh.triangles[g])
-            if (vertex_mark[u] != f) vertex_mark[u] = f, next.push_back(u);
+            if (vertex_mark[u] != tag) vertex_mark[u] = tag, next.push_back(u);
         }
       ring.swap(next);
-      if (r == 0) sum1 = sum, n1 = n;
+      if (r == 0) p.sum1 = p.sum, p.n1 = p.n;
     }
-    if (!unsure && !(n > 0 && sum > o.significance * std::sqrt(2 * v2) + n * rounding)) continue;
+    return p;
+  };
+  auto significant = [&](const Pool& p, double z) { return p.unsure || (p.n > 0 && p.sum > z * std::sqrt(2 * p.v2) + p.n * rounding); };
+
+  // Two stages: a face whose first-stage pool is not even `first_significance` standard errors
+  // above zero is left to interpolation; the faces whose pools are (or hold no first-stage
+  // sample) get the rest of their own samples traced, and are tested again on everything
+  // traced within their pools. (Tracing the rest of every such pool instead, on the shared
+  // scenes, traced most of the pilot again for no better plan.)
+  std::vector<char> candidate(F, 1);
+  if (two_stages) {
+    for (size_t f = 0; f < F; ++f) {
+      const Pool p = pool(f);
+      candidate[f] = p.n == 0 || significant(p, o.first_significance);
+    }
+    std::vector<size_t> second;
+    for (size_t k = 0; k < S; ++k)
+      if (!traced[k] && candidate[pilot.face[k]]) second.push_back(k);
+    trace(second, false);
+    if (progress) progress(S - first.size() - second.size());  // the untraced rest: the bar completes
+    sum_faces();
+    ++pass;
+  }
+  plan.face_weight.assign(F, 0.0);
+  std::vector<double> raw(F, 0.0), area(F, 0.0);
+  double weighted = 0, total_area = 0;
+  for (size_t f = 0; f < F; ++f) {
+    if (!candidate[f]) continue;
+    const Pool p = pool(f);
+    if (!significant(p, o.significance)) continue;
     const Triangle& t = mesh.triangles[f];
-    raw[f] = n1 > 0 ? std::sqrt(std::max(0.0, sum1 / n1)) : 0;
+    raw[f] = p.n1 > 0 ? std::sqrt(std::max(0.0, p.sum1 / p.n1)) : 0;
     area[f] = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
     if (!std::isfinite(area[f])) area[f] = 0;
     weighted += area[f] * raw[f], total_area += area[f];
@@ -178,7 +247,8 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     // (a floor: a face that is sampled only for an unknown noise keeps its minimum)
     if (mean > 0) plan.face_weight[f] = std::max(1e-3, o.area_share + (1 - o.area_share) * raw[f] / mean);
   }
-  plan.pilot_samples = S;
+  plan.pilot_drawn = S;
+  plan.pilot_samples = size_t(std::count(traced.begin(), traced.end(), 1));
   plan.rays = stats.rays;
   plan.seconds = clock.total();
   return plan;

@@ -37,8 +37,13 @@ struct PilotOptions {
   //! share of a face's sample density that follows its area alone; the rest follows its
   //! estimated interpolation error (a floor against a pilot that missed a shadow)
   double area_share = 0.5;
-  //! pilot samples kept with their values as a hold-out set (every ⌈S / holdout⌉-th)
+  //! pilot samples kept with their values as a hold-out set (every ⌈S / holdout⌉-th of the first stage)
   size_t holdout = 262144;
+  //! Two stages when in (0, 1): this share of the samples first, everywhere; the rest only on
+  //! faces whose first-stage pool exceeds `first_significance` standard errors, so a pilot over
+  //! a mesh that interpolation already serves costs little more than its first stage.
+  double first_share = 0.5;
+  double first_significance = 1;
 };
 
 //! A systematic subset of the pilot's samples, kept with their traced values: a hold-out set,
@@ -56,7 +61,8 @@ struct Holdout {
 //! What the pilot found: per-face sample weights for make_surface_samples, and figures.
 struct SamplePlan {
   std::vector<double> face_weight;  //!< #F: 0 where interpolation suffices, else relative density
-  size_t pilot_samples = 0;
+  size_t pilot_drawn = 0;           //!< drawn by make_pilot_samples
+  size_t pilot_samples = 0;         //!< traced (with two stages, fewer than drawn)
   size_t sampled_faces = 0;         //!< faces with a positive weight
   double sampled_area = 0;          //!< their area
   Holdout holdout;                  //!< at most PilotOptions::holdout of the pilot samples

@@ -45,7 +45,8 @@ TEST(SamplePlan, AnOpenPlaneNeedsNoSamples) {
   const SamplePlan p = plan(g);
   EXPECT_EQ(p.sampled_faces, 0u);
   EXPECT_EQ(*std::max_element(p.face_weight.begin(), p.face_weight.end()), 0.0);
-  EXPECT_GE(p.pilot_samples, PilotOptions{}.min_samples);
+  EXPECT_GE(p.pilot_drawn, PilotOptions{}.min_samples);
+  EXPECT_EQ(p.pilot_samples, p.pilot_drawn / 2);  // two stages: nothing needs the second
   EXPECT_EQ(p.rays, uint64_t(PilotOptions{}.rays) * p.pilot_samples);
 }
 
@@ -98,6 +99,37 @@ TEST(SamplePlan, FacesWhereInterpolationFailsAreSampledTheOthersNot) {
   }
   ASSERT_GT(top_n * rest_n, 0u);
   EXPECT_GT(top_w / double(top_n), 1.2 * rest_w / double(rest_n));
+}
+
+TEST(SamplePlan, TwoStagesTraceTheRestOnlyWhereTheFirstCouldNotClearAFace) {
+  // Half the pilot first: on the open plane nothing is left to trace; under the occluder's edge
+  // the faces the one-stage plan samples for their error are still found, and no sample is
+  // traced twice (a sample's rays are its own whichever stage traces it).
+  PilotOptions two, whole;
+  two.first_share = 0.5, whole.first_share = 1;
+  const Ground open(false);
+  const size_t drawn = make_pilot_samples(open.mesh, two, 5).size();
+  const SamplePlan open_plan = plan(open, two);
+  EXPECT_EQ(open_plan.sampled_faces, 0u);
+  EXPECT_EQ(open_plan.pilot_samples, drawn / 2);
+  EXPECT_EQ(open_plan.rays, uint64_t(two.rays) * open_plan.pilot_samples);
+  EXPECT_EQ(open_plan.holdout.size(), open_plan.pilot_samples);  // under the hold-out cap: all of the first stage
+
+  const Ground g(true);
+  const SamplePlan one = plan(g, whole), staged = plan(g, two), staged2 = plan(g, two, 2);
+  EXPECT_EQ(one.pilot_samples, drawn);
+  EXPECT_EQ(staged.face_weight, staged2.face_weight);  // any thread count
+  EXPECT_LT(staged.pilot_samples, drawn);
+  EXPECT_GT(staged.pilot_samples, drawn / 2);
+  EXPECT_EQ(staged.rays, uint64_t(two.rays) * staged.pilot_samples);
+  size_t both = 0, only_one = 0;
+  for (size_t f = 0; f < one.face_weight.size(); ++f) {
+    both += one.face_weight[f] > 0 && staged.face_weight[f] > 0;
+    only_one += one.face_weight[f] > 0 && staged.face_weight[f] == 0;
+  }
+  EXPECT_GT(both, 0u);
+  EXPECT_LE(only_one, one.sampled_faces / 10) << only_one << " of " << one.sampled_faces;
+  EXPECT_EQ(staged.pilot_drawn, drawn);
 }
 
 TEST(SamplePlan, TheSameForAnyThreadCountAndRejectsWhatItCannotUse) {
