@@ -209,8 +209,8 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   // Two stages: a face whose first-stage pool is not even `first_significance` standard errors
   // above zero is left to interpolation; the faces whose pools are (or hold no first-stage
   // sample) get the rest of their own samples traced, and are tested again on everything
-  // traced within their pools. (Tracing the rest of every such pool instead, on the shared
-  // scenes, traced most of the pilot again for no better plan.)
+  // traced within their pools. (Tracing the rest of every such pool would trace most of the
+  // pilot again: a 2-ring pool holds some 25 faces.)
   std::vector<char> candidate(F, 1);
   if (two_stages) {
     for (size_t f = 0; f < F; ++f) {
