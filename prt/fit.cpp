@@ -150,10 +150,9 @@ std::vector<FaceGeometry> all_face_geometry(const Mesh& mesh, int threads = 0) {
   return g;
 }
 
-// body(first, last) for vertex ranges in parallel, each walking every face in order and taking
-// the corners in its range: each vertex sums its terms in the order of one serial pass, so the
-// values do not depend on the number of threads, and the faces' moments (3 rows of K per face,
-// the largest input) are read in order, not gathered at random through each vertex's corners.
+// body(first, last) for ranges of vertices (by rank) in parallel, each walking every face in one
+// fixed order and taking the corners in its range: each vertex sums its terms in the order of one
+// serial pass, so the values do not depend on the number of threads.
 template <class Body>
 void by_vertex_range(size_t V, int threads, Body&& body) {
   const size_t workers = threads > 0 ? size_t(threads) : size_t(tbb::info::default_concurrency());
@@ -181,29 +180,37 @@ VertexCorners vertex_corners(const Mesh& mesh) {
   return vc;
 }
 
-// The free vertices' unknowns in breadth-first order over the faces. A scanned mesh's vertex
-// order can be far from its faces' (armadillo: consecutive faces' first vertices lie a median
-// 25,000 apart), and every pass of CG reads each row's neighbours: numbered breadth-first, they
-// sit in nearby rows.
-// Returns each vertex's slot (-1: not free); `queue` receives the free vertices in slot order.
-std::vector<Eigen::Index> breadth_first_slots(const Mesh& mesh, const VertexCorners& vc, const std::vector<char>& free,
-                                              std::vector<uint32_t>& queue) {
+// Every vertex in breadth-first order over the faces (each component from its lowest vertex).
+// A scanned mesh's vertex order can be far from its faces' (armadillo: consecutive faces' first
+// vertices lie a median 25,000 apart); the fit works in this order instead, so that a vertex's
+// neighbours, and the faces around it, sit nearby in memory: in CG's passes over the rows and
+// in the assembly's walks over the faces.
+std::vector<uint32_t> breadth_first_order(const Mesh& mesh, const VertexCorners& vc) {
   const size_t V = mesh.num_vertices();
-  std::vector<Eigen::Index> slot(V, -1);
-  queue.clear();
+  std::vector<char> seen(V, 0);
+  std::vector<uint32_t> queue;
   queue.reserve(V);
-  Eigen::Index n = 0;
   size_t head = 0;
   for (uint32_t seed = 0; seed < V; ++seed) {
-    if (!free[seed] || slot[seed] >= 0) continue;
-    slot[seed] = n++;
+    if (seen[seed]) continue;
+    seen[seed] = 1;
     queue.push_back(seed);
     for (; head < queue.size(); ++head)
       for (uint32_t k = vc.begin[queue[head]]; k < vc.begin[queue[head] + 1]; ++k)
         for (uint32_t u : mesh.triangles[vc.corner[k] / 3])
-          if (free[u] && slot[u] < 0) slot[u] = n++, queue.push_back(u);
+          if (!seen[u]) seen[u] = 1, queue.push_back(u);
   }
-  return slot;
+  return queue;
+}
+
+// The faces by the least rank of their corners (counting sort: ties keep face order).
+std::vector<uint32_t> faces_in_rank_order(const Mesh& mesh, const std::vector<uint32_t>& rank) {
+  auto key = [&](const Triangle& t) { return std::min({rank[t[0]], rank[t[1]], rank[t[2]]}); };
+  std::vector<uint32_t> begin(mesh.num_vertices() + 1, 0), order(mesh.num_faces());
+  for (const Triangle& t : mesh.triangles) ++begin[key(t) + 1];
+  for (size_t r = 0; r < mesh.num_vertices(); ++r) begin[r + 1] += begin[r];
+  for (uint32_t f = 0; f < mesh.num_faces(); ++f) order[begin[key(mesh.triangles[f])]++] = f;
+  return order;
 }
 
 // Row c of a sampled face's mass block, Σ_k w_k h_c(p_k) h_j(p_k), and its lumped mass Σ_k w_k h_c(p_k).
@@ -371,40 +378,49 @@ VertexEdges vertex_edges(size_t V, const std::vector<EdgeBlock>& blocks) {
   return ve;
 }
 
-// The sparsity of the system, row si for vertex order[si], both triangles, columns sorted, values
-// zero: the free vertices of every face around it and of every edge block it is in (a superset of
-// what the terms fill is harmless). Rows in parallel, each into a slice sized by a bound.
-RowSparseMatrixd system_pattern(const Mesh& mesh, const VertexCorners& corners, const VertexEdges& edges,
-                                const std::vector<EdgeBlock>& blocks, const std::vector<uint32_t>& order,
-                                const std::vector<Eigen::Index>& slot, int threads) {
-  const auto n = static_cast<Eigen::Index>(order.size());
-  std::vector<size_t> bound(size_t(n) + 1, 0);
-  for (Eigen::Index si = 0; si < n; ++si) {
-    const uint32_t v = order[size_t(si)];
-    bound[size_t(si) + 1] = bound[size_t(si)] + 3 * (corners.begin[v + 1] - corners.begin[v]) +
-                            (edges.begin.empty() ? 0 : 4 * (edges.begin[v + 1] - edges.begin[v]));
-  }
-  std::vector<int> col(bound.back());
+// The system's rows, row si for vertex order[si], both triangles, columns sorted: each row's
+// terms are gathered from its vertex's corners (faces in increasing order: the mass, then the
+// gradient term) and edge blocks in a fixed order, and each entry sums its own in that order,
+// so the values do not depend on the number of threads. A term on a vertex fixed at its prior
+// goes to the right-hand side instead (emit_fixed). Rows are built in fixed chunks, in parallel,
+// and then laid out in order.
+template <class Terms, class Fixed>
+RowSparseMatrixd assemble_rows(Eigen::Index n, int threads, Terms&& terms, Fixed&& emit_fixed) {
+  constexpr Eigen::Index kChunk = 1024;
+  const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
+  struct Chunk {
+    std::vector<int> col;
+    std::vector<double> value;
+  };
+  std::vector<Chunk> built(static_cast<size_t>(chunks));
   std::vector<int> length(static_cast<size_t>(n), 0);
-  // Per worker, the row each column was last taken for: a row's candidates repeat 3-5 times.
-  tbb::enumerable_thread_specific<std::vector<Eigen::Index>> taken([n] { return std::vector<Eigen::Index>(size_t(n), -1); });
-  parallel_range(n, threads, Eigen::Index(1024), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    std::vector<Eigen::Index>& row_of = taken.local();
-    for (Eigen::Index si = r.begin(); si < r.end(); ++si) {
-      const uint32_t v = order[size_t(si)];
-      int* first = col.data() + bound[size_t(si)];
-      int* last = first;
-      auto take = [&](uint32_t u) {
-        const Eigen::Index c = slot[u];
-        if (c >= 0 && row_of[size_t(c)] != si) row_of[size_t(c)] = si, *last++ = static_cast<int>(c);
-      };
-      for (uint32_t k = corners.begin[v]; k < corners.begin[v + 1]; ++k)
-        for (uint32_t u : mesh.triangles[corners.corner[k] / 3]) take(u);
-      if (!edges.begin.empty())
-        for (uint32_t k = edges.begin[v]; k < edges.begin[v + 1]; ++k)
-          for (uint32_t u : blocks[edges.pair[k] / 4].idx) take(u);
-      std::sort(first, last);
-      length[size_t(si)] = static_cast<int>(last - first);
+  struct Scratch {
+    std::vector<std::pair<int, double>> terms;
+    std::vector<int> position, distinct;
+    std::vector<double> sum;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch([n] { return Scratch{{}, std::vector<int>(size_t(n), -1), {}, {}}; });
+  parallel_range(chunks, threads, Eigen::Index(1), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    Scratch& w = scratch.local();
+    for (Eigen::Index c = r.begin(); c < r.end(); ++c) {
+      Chunk& out = built[size_t(c)];
+      for (Eigen::Index si = c * kChunk; si < std::min(n, (c + 1) * kChunk); ++si) {
+        w.terms.clear(), w.distinct.clear();
+        terms(si, [&](Eigen::Index sj, uint32_t j, double x) {
+          if (sj < 0) emit_fixed(si, j, x);
+          else w.terms.emplace_back(static_cast<int>(sj), x);
+        });
+        for (const auto& t : w.terms)
+          if (w.position[size_t(t.first)] < 0) w.position[size_t(t.first)] = 0, w.distinct.push_back(t.first);
+        std::sort(w.distinct.begin(), w.distinct.end());
+        for (size_t k = 0; k < w.distinct.size(); ++k) w.position[size_t(w.distinct[k])] = static_cast<int>(k);
+        w.sum.assign(w.distinct.size(), 0.0);
+        for (const auto& t : w.terms) w.sum[size_t(w.position[size_t(t.first)])] += t.second;
+        for (int col : w.distinct) w.position[size_t(col)] = -1;
+        out.col.insert(out.col.end(), w.distinct.begin(), w.distinct.end());
+        out.value.insert(out.value.end(), w.sum.begin(), w.sum.end());
+        length[size_t(si)] = static_cast<int>(w.distinct.size());
+      }
     }
   });
   RowSparseMatrixd m(n, n);
@@ -412,10 +428,11 @@ RowSparseMatrixd system_pattern(const Mesh& mesh, const VertexCorners& corners, 
   outer[0] = 0;
   for (Eigen::Index si = 0; si < n; ++si) outer[si + 1] = outer[si] + length[size_t(si)];
   m.resizeNonZeros(outer[n]);
-  parallel_range(n, threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    for (Eigen::Index si = r.begin(); si < r.end(); ++si) {
-      std::copy_n(col.data() + bound[size_t(si)], length[size_t(si)], m.innerIndexPtr() + outer[si]);
-      std::fill_n(m.valuePtr() + outer[si], length[size_t(si)], 0.0);
+  parallel_range(chunks, threads, Eigen::Index(1), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index c = r.begin(); c < r.end(); ++c) {
+      const Chunk& in = built[size_t(c)];
+      std::copy(in.col.begin(), in.col.end(), m.innerIndexPtr() + outer[c * kChunk]);
+      std::copy(in.value.begin(), in.value.end(), m.valuePtr() + outer[c * kChunk]);
     }
   });
   return m;
@@ -493,10 +510,14 @@ struct FaceSums {
   //! left to interpolation (SurfaceSamples::interpolated) say only that the prior is right there
   Eigen::VectorXd support;
   RowMatrixXd b;  // #V by K
-};
+};  // (each indexed by the vertex's rank, see sum_faces)
 
+// Indexed by rank (vertex order[r] has rank r): each range of ranks walks the faces in
+// face_order, so a vertex sums its terms in that fixed order whatever the number of threads.
+// prior_ranked: the prior's rows in rank order.
 FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<FaceGeometry>& geom, const FaceMoments& moments,
-                   const RowMatrixXd& prior, const FitOptions& o) {
+                   const RowMatrixXd& prior_ranked, const std::vector<uint32_t>& rank, const std::vector<uint32_t>& face_order,
+                   const FitOptions& o) {
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   const Eigen::Index K = moments.rows.cols();
   // b estimates ∫h_i f with an error proportional to f itself, not to its variation, and A⁻¹
@@ -505,12 +526,27 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   // is then proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
   const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
   FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
+  // Each sampled face's three rows of its samples' own mass and their lumped masses, once per
+  // face (the vertex ranges below would read the samples once per corner).
+  std::vector<std::array<double, 4>> corner_mass(3 * mesh.num_faces());
+  parallel_range(mesh.num_faces(), o.threads, size_t(1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f < r.end(); ++f)
+      if (!face_interpolated(s, f) && face_has_samples(s, f))
+        for (int c = 0; c < 3; ++c) corner_mass[3 * f + size_t(c)][3] = sampled_mass_row(s, f, c, corner_mass[3 * f + size_t(c)].data());
+  });
+  // The faces' corners by rank, in walk order: every range reads them, so they are looked up once.
+  std::vector<std::array<uint32_t, 3>> ranked(face_order.size());
+  parallel_range(face_order.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      for (int c = 0; c < 3; ++c) ranked[i][size_t(c)] = rank[mesh.triangles[face_order[i]][size_t(c)]];
+  });
   by_vertex_range(size_t(V), o.threads, [&](size_t first, size_t last) {
-    for (size_t f = 0; f < mesh.num_faces(); ++f)
+    for (size_t i = 0; i < face_order.size(); ++i)
       for (int c = 0; c < 3; ++c) {
-        const Triangle& tri = mesh.triangles[f];
-        const uint32_t v = tri[c];
+        const uint32_t v = ranked[i][size_t(c)];
         if (v < first || v >= last) continue;
+        const size_t f = face_order[i];
+        const std::array<uint32_t, 3>& tri = ranked[i];
         double* row = sums.b.row(v).data();
         if (face_interpolated(s, f)) {
           // No samples, by design: the face's data is the prior's interpolant, so it adds
@@ -519,22 +555,22 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
           sums.lumped_sampled[v] += geom[f].area / 3;
           for (int c2 = 0; c2 < 3; ++c2) {
             const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0);
-            const double* p = prior.row(tri[c2]).data();
+            const double* p = prior_ranked.row(tri[size_t(c2)]).data();
             for (Eigen::Index q = 0; q < K; ++q) row[q] += coeff * p[q];
           }
           continue;
         }
         if (!face_has_samples(s, f)) continue;
-        double ms[3];
+        const double* ms = corner_mass[3 * f + size_t(c)].data();
         sums.lumped_analytic[v] += geom[f].area / 3;
-        sums.lumped_sampled[v] += sampled_mass_row(s, f, c, ms);
+        sums.lumped_sampled[v] += ms[3];
         sums.support[v] += geom[f].area / 3;
         const double* local = moments.rows.row(static_cast<Eigen::Index>(3 * f + size_t(c))).data();
         for (Eigen::Index q = 0; q < K; ++q) row[q] += local[q];
         if (!use_cv) continue;
         for (int c2 = 0; c2 < 3; ++c2) {
           const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0) - ms[c2];
-          const double* p = prior.row(tri[c2]).data();
+          const double* p = prior_ranked.row(tri[size_t(c2)]).data();
           for (Eigen::Index q = 0; q < K; ++q) row[q] += coeff * p[q];
         }
       }
@@ -583,23 +619,34 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   const Eigen::Index K = moments.rows.cols();
   const std::vector<FaceGeometry> geom = all_face_geometry(mesh, o.threads);
-  FaceSums sums = sum_faces(mesh, s, geom, moments, prior, o);
+  const VertexCorners corners = vertex_corners(mesh);
+  const std::vector<uint32_t> by_rank = breadth_first_order(mesh, corners);
+  std::vector<uint32_t> rank(static_cast<size_t>(V));
+  for (uint32_t r = 0; r < by_rank.size(); ++r) rank[by_rank[r]] = r;
+  RowMatrixXd prior_ranked(V, K);
+  parallel_range(V, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
+    for (Eigen::Index i = r.begin(); i < r.end(); ++i) prior_ranked.row(i) = prior.row(by_rank[size_t(i)]);
+  });
+  FaceSums sums = sum_faces(mesh, s, geom, moments, prior_ranked, rank, faces_in_rank_order(mesh, rank), o);
   const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? sums.lumped_analytic : sums.lumped_sampled;
   // A vertex is free when its lumped mass is a meaningful share of a typical one; the others keep
   // their prior, and their columns move to the right-hand side.
   const double typical = lumped.sum() / static_cast<double>(std::max<Eigen::Index>(V, 1));
   FitSystem sys;
-  std::vector<char> free(static_cast<size_t>(V));
-  for (Eigen::Index i = 0; i < V; ++i) free[size_t(i)] = lumped[i] > 1e-12 * typical && sums.support[i] > 1e-12 * typical;
-  const VertexCorners corners = vertex_corners(mesh);
-  std::vector<uint32_t> order;
-  sys.slot = breadth_first_slots(mesh, corners, free, order);
+  // The unknowns: the free vertices in rank order. (sums are by rank.)
+  std::vector<uint32_t> order;  // slot → vertex
+  sys.slot.assign(static_cast<size_t>(V), -1);
+  for (Eigen::Index r = 0; r < V; ++r)
+    if (lumped[r] > 1e-12 * typical && sums.support[r] > 1e-12 * typical)
+      sys.slot[by_rank[size_t(r)]] = static_cast<Eigen::Index>(order.size()), order.push_back(by_rank[size_t(r)]);
   const auto n = static_cast<Eigen::Index>(order.size());
-  sys.rhs.resize(n, K);
-  parallel_range(V, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    for (Eigen::Index i = r.begin(); i < r.end(); ++i)
-      if (sys.slot[size_t(i)] >= 0) sys.rhs.row(sys.slot[size_t(i)]) = sums.b.row(i);
-  });
+  if (n == V) {
+    sys.rhs.swap(sums.b);  // every vertex free, the common case: no copy
+  } else {
+    sys.rhs.resize(n, K);
+    for (Eigen::Index r = 0; r < V; ++r)
+      if (sys.slot[by_rank[size_t(r)]] >= 0) sys.rhs.row(sys.slot[by_rank[size_t(r)]]) = sums.b.row(r);
+  }
   // Straight into the final pattern: no triplets, whose memory costs more than their arithmetic.
   const bool edge_term = o.alpha > 0 && o.regularizer == Regularizer::Edge;
   const EdgePairs edges = edge_term ? interior_edge_pairs(mesh) : EdgePairs();
@@ -610,71 +657,56 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   });
   blocks = in_row_order(std::move(blocks), sys.slot, n);
   const VertexEdges vertex_blocks = vertex_edges(size_t(V), blocks);
-  sys.matrix = system_pattern(mesh, corners, vertex_blocks, blocks, order, sys.slot, o.threads);
-  // Row by row, each from its vertex's corners (faces in increasing order: the mass, then the
-  // gradient term) or edges, so each entry sums its terms in the order of one serial pass over
-  // the faces or edges and the values do not depend on the number of threads.
-  const int* outer = sys.matrix.outerIndexPtr();
-  const int* inner = sys.matrix.innerIndexPtr();
-  double* value = sys.matrix.valuePtr();
-  // Per worker, each column's position in the current row (-1 elsewhere).
-  tbb::enumerable_thread_specific<std::vector<int>> positions([n] { return std::vector<int>(size_t(n), -1); });
-  parallel_range(n, o.threads, Eigen::Index(1024), [&](const tbb::blocked_range<Eigen::Index>& range) {
-    std::vector<int>& pos = positions.local();
-    for (Eigen::Index si = range.begin(); si < range.end(); ++si) {
-      const uint32_t v = order[size_t(si)];
-      double* rhs = sys.rhs.row(si).data();
-      for (int k = outer[si]; k < outer[si + 1]; ++k) pos[size_t(inner[k])] = k;
-      // Entry (si, j) += x, or to the right-hand side when j is fixed at its prior.
-      auto add = [&](uint32_t j, double x) {
-        const Eigen::Index sj = sys.slot[j];
-        if (sj < 0) {
-          const double* p = prior.row(j).data();
-          for (Eigen::Index q = 0; q < K; ++q) rhs[q] -= x * p[q];
-          return;
-        }
-        const int k = pos[size_t(sj)];
-        if (k < 0) throw SolverError("fit: internal error: an entry outside the system's pattern");
-        value[k] += x;
-      };
-      const uint32_t* first = corners.corner.data() + corners.begin[v];
-      const uint32_t* last = corners.corner.data() + corners.begin[v + 1];
+  auto terms = [&](Eigen::Index si, auto&& add_term) {
+    const uint32_t v = order[size_t(si)];
+    auto add = [&](uint32_t j, double x) { add_term(sys.slot[j], j, x); };
+    const uint32_t* first = corners.corner.data() + corners.begin[v];
+    const uint32_t* last = corners.corner.data() + corners.begin[v + 1];
+    for (const uint32_t* h = first; h != last; ++h) {
+      const size_t f = *h / 3;
+      const int c = int(*h % 3);
+      const bool interpolated = face_interpolated(s, f);
+      if (!interpolated && !face_has_samples(s, f)) continue;
+      const Triangle& tri = mesh.triangles[f];
+      if (o.mass == MassMatrix::Analytic || interpolated) {  // an interpolated face's data is exact
+        for (int j = 0; j < 3; ++j) add(tri[j], geom[f].area / (j == c ? 6 : 12));
+      } else {
+        double row[3];
+        sampled_mass_row(s, f, c, row);
+        for (int j = 0; j < 3; ++j) add(tri[j], row[j]);
+      }
+    }
+    if (o.alpha > 0 && !edge_term)
       for (const uint32_t* h = first; h != last; ++h) {
         const size_t f = *h / 3;
         const int c = int(*h % 3);
-        const bool interpolated = face_interpolated(s, f);
-        if (!interpolated && !face_has_samples(s, f)) continue;
-        const Triangle& tri = mesh.triangles[f];
-        if (o.mass == MassMatrix::Analytic || interpolated) {  // an interpolated face's data is exact
-          for (int j = 0; j < 3; ++j) add(tri[j], geom[f].area / (j == c ? 6 : 12));
-        } else {
-          double row[3];
-          sampled_mass_row(s, f, c, row);
-          for (int j = 0; j < 3; ++j) add(tri[j], row[j]);
-        }
+        if (!(geom[f].area > floor)) continue;
+        for (int j = 0; j < 3; ++j) add(mesh.triangles[f][j], o.alpha * 0.25 * geom[f].e[c].dot(geom[f].e[j]));
       }
-      if (o.alpha > 0 && !edge_term)
-        for (const uint32_t* h = first; h != last; ++h) {
-          const size_t f = *h / 3;
-          const int c = int(*h % 3);
-          if (!(geom[f].area > floor)) continue;
-          for (int j = 0; j < 3; ++j) add(mesh.triangles[f][j], o.alpha * 0.25 * geom[f].e[c].dot(geom[f].e[j]));
-        }
-      if (edge_term)
-        for (uint32_t k = vertex_blocks.begin[v]; k < vertex_blocks.begin[v + 1]; ++k) {
-          const EdgeBlock& b = blocks[vertex_blocks.pair[k] / 4];
-          const uint32_t i = vertex_blocks.pair[k] % 4;
-          for (int j = 0; j < 4; ++j) add(b.idx[j], b.w * b.q[i] * b.q[j]);
-        }
-      for (int k = outer[si]; k < outer[si + 1]; ++k) pos[size_t(inner[k])] = -1;
-    }
-  });
+    if (edge_term)
+      for (uint32_t k = vertex_blocks.begin[v]; k < vertex_blocks.begin[v + 1]; ++k) {
+        const EdgeBlock& b = blocks[vertex_blocks.pair[k] / 4];
+        const uint32_t i = vertex_blocks.pair[k] % 4;
+        for (int j = 0; j < 4; ++j) add(b.idx[j], b.w * b.q[i] * b.q[j]);
+      }
+  };
+  // A term on a vertex fixed at its prior moves to the right-hand side (rows of distinct si:
+  // no two workers share one).
+  auto fixed = [&](Eigen::Index si, uint32_t j, double x) {
+    double* rhs = sys.rhs.row(si).data();
+    const double* p = prior.row(j).data();
+    for (Eigen::Index q = 0; q < K; ++q) rhs[q] -= x * p[q];
+  };
+  sys.matrix = assemble_rows(n, o.threads, terms, fixed);
+  const int* outer = sys.matrix.outerIndexPtr();
+  const int* inner = sys.matrix.innerIndexPtr();
+  double* value = sys.matrix.valuePtr();
   // Jacobi scaling: a unit diagonal makes the factor's condition estimate mean "digits lost"
   // whatever the mesh's units and the spread of its triangle sizes, and is CG's preconditioner.
   sys.scale.resize(n);
   sys.lumped.resize(n);
-  for (Eigen::Index i = 0; i < V; ++i)
-    if (sys.slot[size_t(i)] >= 0) sys.lumped[sys.slot[size_t(i)]] = lumped[i];
+  for (Eigen::Index r = 0; r < V; ++r)
+    if (sys.slot[by_rank[size_t(r)]] >= 0) sys.lumped[sys.slot[by_rank[size_t(r)]]] = lumped[r];
   parallel_range(n, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
     for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
       double d = 0;
@@ -950,7 +982,11 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     x = prior;
   } else if (o.method == FitMethod::Average) {
     const Stopwatch clock;
-    const FaceSums sums = sum_faces(mesh, s, all_face_geometry(mesh, o.threads), moments, prior, o);
+    // In the mesh's own order (rank = vertex index).
+    std::vector<uint32_t> identity(mesh.num_vertices()), faces(mesh.num_faces());
+    for (uint32_t i = 0; i < identity.size(); ++i) identity[i] = i;
+    for (uint32_t f = 0; f < faces.size(); ++f) faces[f] = f;
+    const FaceSums sums = sum_faces(mesh, s, all_face_geometry(mesh, o.threads), moments, prior, identity, faces, o);
     const Eigen::VectorXd& lumped = o.mass == MassMatrix::Analytic ? sums.lumped_analytic : sums.lumped_sampled;
     const double typical = lumped.sum() / static_cast<double>(std::max<size_t>(mesh.num_vertices(), 1));
     std::vector<char> free(mesh.num_vertices());
