@@ -293,8 +293,14 @@ struct EdgeBlock {
 };
 
 EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const std::array<uint32_t, 2>& edge, double floor,
-                     double scale) {
+                     double scale, const std::vector<Eigen::Index>* unknowns = nullptr) {
   EdgeBlock b;
+  if (unknowns) {  // a block none of whose vertices is an unknown adds nothing
+    bool any = false;
+    for (uint32_t he : edge)
+      for (uint32_t v : mesh.triangles[he / 3]) any |= (*unknowns)[v] >= 0;
+    if (!any) return b;
+  }
   double area[2];
   int n = 0;
   for (int side = 0; side < 2; ++side) {
@@ -509,7 +515,7 @@ struct FaceSums {
   //! ∫h_i over the faces with samples only: a vertex without any keeps its prior, since faces
   //! left to interpolation (SurfaceSamples::interpolated) say only that the prior is right there
   Eigen::VectorXd support;
-  RowMatrixXd b;  // #V by K
+  RowMatrixXd b;  // #V by K; zero where no sampled face touches the vertex (it keeps its prior)
 };  // (each indexed by the vertex's rank, see sum_faces)
 
 // Indexed by rank (vertex order[r] has rank r): each range of ranks walks the faces in
@@ -540,6 +546,12 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
     for (size_t i = r.begin(); i < r.end(); ++i)
       for (int c = 0; c < 3; ++c) ranked[i][size_t(c)] = rank[mesh.triangles[face_order[i]][size_t(c)]];
   });
+  // Vertices with a sampled face around them: only they can be unknowns, so only their b is
+  // summed (with the pilot, most faces are left to interpolation and most vertices keep their prior).
+  std::vector<char> touched(static_cast<size_t>(V), 0);
+  for (size_t i = 0; i < face_order.size(); ++i)
+    if (!face_interpolated(s, face_order[i]) && face_has_samples(s, face_order[i]))
+      for (uint32_t v : ranked[i]) touched[v] = 1;
   by_vertex_range(size_t(V), o.threads, [&](size_t first, size_t last) {
     for (size_t i = 0; i < face_order.size(); ++i)
       for (int c = 0; c < 3; ++c) {
@@ -553,6 +565,7 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
           // ∫h_i g_prior = A_f·prior exactly, and its mass to both lumped masses.
           sums.lumped_analytic[v] += geom[f].area / 3;
           sums.lumped_sampled[v] += geom[f].area / 3;
+          if (!touched[v]) continue;
           for (int c2 = 0; c2 < 3; ++c2) {
             const double coeff = geom[f].area / (c == c2 ? 6.0 : 12.0);
             const double* p = prior_ranked.row(tri[size_t(c2)]).data();
@@ -653,7 +666,7 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const double floor = area_floor(geom);
   std::vector<EdgeBlock> blocks(edges.size());
   parallel_range(edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t e = r.begin(); e < r.end(); ++e) blocks[e] = edge_block(mesh, geom, edges[e], floor, o.alpha);
+    for (size_t e = r.begin(); e < r.end(); ++e) blocks[e] = edge_block(mesh, geom, edges[e], floor, o.alpha, &sys.slot);
   });
   blocks = in_row_order(std::move(blocks), sys.slot, n);
   const VertexEdges vertex_blocks = vertex_edges(size_t(V), blocks);
