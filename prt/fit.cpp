@@ -293,14 +293,8 @@ struct EdgeBlock {
 };
 
 EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const std::array<uint32_t, 2>& edge, double floor,
-                     double scale, const std::vector<Eigen::Index>* unknowns = nullptr) {
+                     double scale) {
   EdgeBlock b;
-  if (unknowns) {  // a block none of whose vertices is an unknown adds nothing
-    bool any = false;
-    for (uint32_t he : edge)
-      for (uint32_t v : mesh.triangles[he / 3]) any |= (*unknowns)[v] >= 0;
-    if (!any) return b;
-  }
   double area[2];
   int n = 0;
   for (int side = 0; side < 2; ++side) {
@@ -534,11 +528,19 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
   // Each sampled face's three rows of its samples' own mass and their lumped masses, once per
   // face (the vertex ranges below would read the samples once per corner).
-  std::vector<std::array<double, 4>> corner_mass(3 * mesh.num_faces());
+  // (Stored for the sampled faces only: with the pilot, a few percent of them.)
+  std::vector<uint32_t> sampled(mesh.num_faces(), UINT32_MAX);
+  uint32_t count = 0;
+  for (size_t f = 0; f < mesh.num_faces(); ++f)
+    if (!face_interpolated(s, f) && face_has_samples(s, f)) sampled[f] = count++;
+  std::vector<std::array<double, 4>> corner_mass(3 * size_t(count));
   parallel_range(mesh.num_faces(), o.threads, size_t(1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t f = r.begin(); f < r.end(); ++f)
-      if (!face_interpolated(s, f) && face_has_samples(s, f))
-        for (int c = 0; c < 3; ++c) corner_mass[3 * f + size_t(c)][3] = sampled_mass_row(s, f, c, corner_mass[3 * f + size_t(c)].data());
+      if (sampled[f] != UINT32_MAX)
+        for (int c = 0; c < 3; ++c) {
+          std::array<double, 4>& m = corner_mass[3 * size_t(sampled[f]) + size_t(c)];
+          m[3] = sampled_mass_row(s, f, c, m.data());
+        }
   });
   // The faces' corners by rank, in walk order: every range reads them, so they are looked up once.
   std::vector<std::array<uint32_t, 3>> ranked(face_order.size());
@@ -574,7 +576,7 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
           continue;
         }
         if (!face_has_samples(s, f)) continue;
-        const double* ms = corner_mass[3 * f + size_t(c)].data();
+        const double* ms = corner_mass[3 * size_t(sampled[f]) + size_t(c)].data();
         sums.lumped_analytic[v] += geom[f].area / 3;
         sums.lumped_sampled[v] += ms[3];
         sums.support[v] += geom[f].area / 3;
@@ -664,11 +666,21 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const bool edge_term = o.alpha > 0 && o.regularizer == Regularizer::Edge;
   const EdgePairs edges = edge_term ? interior_edge_pairs(mesh) : EdgePairs();
   const double floor = area_floor(geom);
-  std::vector<EdgeBlock> blocks(edges.size());
+  // Only the edges with an unknown among their four vertices (with the pilot, a few percent).
+  std::vector<char> live(edges.size(), 0);
   parallel_range(edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t e = r.begin(); e < r.end(); ++e) blocks[e] = edge_block(mesh, geom, edges[e], floor, o.alpha, &sys.slot);
+    for (size_t e = r.begin(); e < r.end(); ++e)
+      for (uint32_t he : edges[e])
+        for (uint32_t v : mesh.triangles[he / 3]) live[e] |= sys.slot[v] >= 0;
   });
-  blocks = in_row_order(std::move(blocks), sys.slot, n);
+  std::vector<uint32_t> live_edges;
+  for (uint32_t e = 0; e < edges.size(); ++e)
+    if (live[e]) live_edges.push_back(e);
+  std::vector<EdgeBlock> blocks(live_edges.size());
+  parallel_range(live_edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) blocks[i] = edge_block(mesh, geom, edges[live_edges[i]], floor, o.alpha);
+  });
+  blocks = in_row_order(std::move(blocks), sys.slot, n);  // (the used ones)
   const VertexEdges vertex_blocks = vertex_edges(size_t(V), blocks);
   auto terms = [&](Eigen::Index si, auto&& add_term) {
     const uint32_t v = order[size_t(si)];

@@ -34,6 +34,9 @@
 #include <cstdint>
 #include <cmath>
 
+#include <tbb/enumerable_thread_specific.h>
+
+#include "prtsub/prt/parallel.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
 
@@ -180,26 +183,32 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     double sum = 0, v2 = 0, n = 0, sum1 = 0, n1 = 0;  // sum1, n1: the first ring's, for the density
     bool unsure = false;
   };
-  std::vector<size_t> face_mark(F, SIZE_MAX), vertex_mark(V, SIZE_MAX), ring, next;
-  size_t pass = 0;  // marks are (pass, face) so that the second pass starts clean
+  // Pools are independent: faces in parallel, each worker with its own marks (tagged by pass and
+  // face, so that the second pass starts clean), each pool summed in its own fixed order.
+  struct Marks {
+    std::vector<size_t> face, vertex, ring, next;
+  };
+  tbb::enumerable_thread_specific<Marks> marks([&] { return Marks{std::vector<size_t>(F, SIZE_MAX), std::vector<size_t>(V, SIZE_MAX), {}, {}}; });
+  size_t pass = 0;
   auto pool = [&](size_t f) {
+    Marks& m = marks.local();
     Pool p;
     const size_t tag = pass * F + f;
-    ring.assign(mesh.triangles[f].begin(), mesh.triangles[f].end());
-    for (uint32_t v : mesh.triangles[f]) vertex_mark[v] = tag;
+    m.ring.assign(mesh.triangles[f].begin(), mesh.triangles[f].end());
+    for (uint32_t v : mesh.triangles[f]) m.vertex[v] = tag;
     for (int r = 0; r < std::max(1, o.rings); ++r) {
-      next.clear();
-      for (size_t v : ring)
+      m.next.clear();
+      for (size_t v : m.ring)
         for (size_t j = vf_begin[v]; j < vf_begin[v + 1]; ++j) {
           const size_t g = vf[j];
-          if (face_mark[g] == tag) continue;
-          face_mark[g] = tag;
+          if (m.face[g] == tag) continue;
+          m.face[g] = tag;
           p.sum += face_sum[g], p.v2 += face_v2[g], p.n += static_cast<double>(face_count[g]);
           p.unsure |= unknown[g] != 0;
           for (uint32_t u : mesh.triangles[g])
-            if (vertex_mark[u] != tag) vertex_mark[u] = tag, next.push_back(u);
+            if (m.vertex[u] != tag) m.vertex[u] = tag, m.next.push_back(u);
         }
-      ring.swap(next);
+      m.ring.swap(m.next);
       if (r == 0) p.sum1 = p.sum, p.n1 = p.n;
     }
     return p;
@@ -213,10 +222,12 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   // pilot again: a 2-ring pool holds some 25 faces.)
   std::vector<char> candidate(F, 1);
   if (two_stages) {
-    for (size_t f = 0; f < F; ++f) {
-      const Pool p = pool(f);
-      candidate[f] = p.n == 0 || significant(p, o.first_significance);
-    }
+    parallel_range(F, to.threads, size_t(1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f) {
+        const Pool p = pool(f);
+        candidate[f] = p.n == 0 || significant(p, o.first_significance);
+      }
+    });
     std::vector<size_t> second;
     for (size_t k = 0; k < S; ++k)
       if (!traced[k] && candidate[pilot.face[k]]) second.push_back(k);
@@ -228,17 +239,20 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   plan.face_weight.assign(F, 0.0);
   std::vector<double> raw(F, 0.0), area(F, 0.0);
   double weighted = 0, total_area = 0;
-  for (size_t f = 0; f < F; ++f) {
-    if (!candidate[f]) continue;
-    const Pool p = pool(f);
-    if (!significant(p, o.significance)) continue;
-    const Triangle& t = mesh.triangles[f];
-    raw[f] = p.n1 > 0 ? std::sqrt(std::max(0.0, p.sum1 / p.n1)) : 0;
-    area[f] = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
-    if (!std::isfinite(area[f])) area[f] = 0;
-    weighted += area[f] * raw[f], total_area += area[f];
-    plan.face_weight[f] = 1;
-  }
+  parallel_range(F, to.threads, size_t(1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f < r.end(); ++f) {
+      if (!candidate[f]) continue;
+      const Pool p = pool(f);
+      if (!significant(p, o.significance)) continue;
+      const Triangle& t = mesh.triangles[f];
+      raw[f] = p.n1 > 0 ? std::sqrt(std::max(0.0, p.sum1 / p.n1)) : 0;
+      area[f] = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
+      if (!std::isfinite(area[f])) area[f] = 0;
+      plan.face_weight[f] = 1;
+    }
+  });
+  for (size_t f = 0; f < F; ++f)
+    if (plan.face_weight[f] > 0) weighted += area[f] * raw[f], total_area += area[f];
   const double mean = total_area > 0 ? weighted / total_area : 0;
   for (size_t f = 0; f < F; ++f) {
     if (plan.face_weight[f] == 0) continue;
