@@ -49,8 +49,8 @@ struct FitOptions {
   bool control_variate = true;
   FitSolver solver = FitSolver::Auto;
   //! CG's relative residual per column (of the Jacobi-scaled system). 1e-6 moves no stored value
-  //! by more than 3e-5 of the largest from the exact solve, far below the samples' noise
-  //! (bench/fit_tolerance.sh), in about 60% of the iterations 1e-10 takes.
+  //! by more than 1.4e-4 of the largest from the exact solve (armadillo; eval's error the same to
+  //! four digits: bench/fit_tolerance.sh), in about 60% of the iterations 1e-10 takes.
   double cg_tolerance = 1e-6;
   int cg_max_iterations = 100;  //!< beyond this (or when CG predicts it), CHOLMOD takes over
   int threads = 0;     //!< for the iterative solve; 0: every core (the result does not depend on it)
