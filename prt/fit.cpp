@@ -162,30 +162,12 @@ void by_vertex_range(size_t V, int threads, Body&& body) {
   });
 }
 
-// Each vertex's corners h = 3f + c, in increasing order.
-struct VertexCorners {
-  std::vector<uint32_t> begin;  // #V + 1
-  std::vector<uint32_t> corner;
-};
-
-VertexCorners vertex_corners(const Mesh& mesh) {
-  VertexCorners vc;
-  vc.begin.assign(mesh.num_vertices() + 1, 0);
-  for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) ++vc.begin[t[c] + 1];
-  for (size_t v = 0; v < mesh.num_vertices(); ++v) vc.begin[v + 1] += vc.begin[v];
-  vc.corner.resize(3 * mesh.num_faces());
-  std::vector<uint32_t> end(vc.begin.begin(), vc.begin.end() - 1);
-  for (uint32_t h = 0; h < vc.corner.size(); ++h) vc.corner[end[mesh.triangles[h / 3][h % 3]]++] = h;
-  return vc;
-}
-
 // Every vertex in breadth-first order over the faces (each component from its lowest vertex).
 // A scanned mesh's vertex order can be far from its faces' (armadillo: consecutive faces' first
 // vertices lie a median 25,000 apart); the fit works in this order instead, so that a vertex's
 // neighbours, and the faces around it, sit nearby in memory: in CG's passes over the rows and
 // in the assembly's walks over the faces.
-std::vector<uint32_t> breadth_first_order(const Mesh& mesh, const VertexCorners& vc) {
+std::vector<uint32_t> breadth_first_order(const Mesh& mesh, const Buckets& corners) {
   const size_t V = mesh.num_vertices();
   std::vector<char> seen(V, 0);
   std::vector<uint32_t> queue;
@@ -196,21 +178,19 @@ std::vector<uint32_t> breadth_first_order(const Mesh& mesh, const VertexCorners&
     seen[seed] = 1;
     queue.push_back(seed);
     for (; head < queue.size(); ++head)
-      for (uint32_t k = vc.begin[queue[head]]; k < vc.begin[queue[head] + 1]; ++k)
-        for (uint32_t u : mesh.triangles[vc.corner[k] / 3])
+      for (uint32_t k = corners.begin[queue[head]]; k < corners.begin[queue[head] + 1]; ++k)
+        for (uint32_t u : mesh.triangles[corners.entry[k] / 3])
           if (!seen[u]) seen[u] = 1, queue.push_back(u);
   }
   return queue;
 }
 
-// The faces by the least rank of their corners (counting sort: ties keep face order).
+// The faces by the least rank of their corners (ties keep face order).
 std::vector<uint32_t> faces_in_rank_order(const Mesh& mesh, const std::vector<uint32_t>& rank) {
-  auto key = [&](const Triangle& t) { return std::min({rank[t[0]], rank[t[1]], rank[t[2]]}); };
-  std::vector<uint32_t> begin(mesh.num_vertices() + 1, 0), order(mesh.num_faces());
-  for (const Triangle& t : mesh.triangles) ++begin[key(t) + 1];
-  for (size_t r = 0; r < mesh.num_vertices(); ++r) begin[r + 1] += begin[r];
-  for (uint32_t f = 0; f < mesh.num_faces(); ++f) order[begin[key(mesh.triangles[f])]++] = f;
-  return order;
+  const std::vector<Triangle>& t = mesh.triangles;
+  return bucket_sort(mesh.num_vertices(), t.size(), 1, [&](size_t f, uint32_t) {
+           return std::min({rank[t[f][0]], rank[t[f][1]], rank[t[f][2]]});
+         }).entry;
 }
 
 // Row c of a sampled face's mass block, Σ_k w_k h_c(p_k) h_j(p_k), and its lumped mass Σ_k w_k h_c(p_k).
@@ -336,46 +316,25 @@ size_t emit_edge(const Mesh& mesh, const std::vector<FaceGeometry>& g, const Edg
   return used;
 }
 
-// The used blocks by their first row (the least slot of their free vertices; counting sort, so
-// ties keep edge order): a row's blocks then lie near each other and near its neighbours' rows,
-// as the breadth-first numbering does for the rows themselves.
-std::vector<EdgeBlock> in_row_order(std::vector<EdgeBlock> blocks, const std::vector<Eigen::Index>& slot, Eigen::Index n) {
-  auto first_row = [&](const EdgeBlock& b) {
+// The used blocks by their first row (the least slot of their free vertices; ties keep edge
+// order): a row's blocks then lie near each other and near its neighbours' rows, as the
+// breadth-first numbering does for the rows themselves.
+std::vector<EdgeBlock> in_row_order(const std::vector<EdgeBlock>& blocks, const std::vector<Eigen::Index>& slot, Eigen::Index n) {
+  const Buckets rows = bucket_sort(size_t(n) + 1, blocks.size(), 1, [&](size_t e, uint32_t) {
+    if (!blocks[e].used) return Buckets::kNone;
     Eigen::Index r = n;
-    for (uint32_t v : b.idx)
+    for (uint32_t v : blocks[e].idx)
       if (slot[v] >= 0) r = std::min(r, slot[v]);
-    return r;
-  };
-  std::vector<uint32_t> begin(size_t(n) + 2, 0);
-  for (const EdgeBlock& b : blocks)
-    if (b.used) ++begin[size_t(first_row(b)) + 1];
-  for (size_t r = 0; r + 1 < begin.size(); ++r) begin[r + 1] += begin[r];
-  std::vector<EdgeBlock> sorted(begin.back());
-  for (const EdgeBlock& b : blocks)
-    if (b.used) sorted[begin[size_t(first_row(b))]++] = b;
+    return static_cast<uint32_t>(r);
+  });
+  std::vector<EdgeBlock> sorted(rows.entry.size());
+  for (size_t i = 0; i < sorted.size(); ++i) sorted[i] = blocks[rows.entry[i]];
   return sorted;
 }
 
 // Each vertex's (edge block, corner of the block) pairs 4e + i, in increasing block order.
-struct VertexEdges {
-  std::vector<uint32_t> begin;  // #V + 1 (empty without the edge term)
-  std::vector<uint32_t> pair;
-};
-
-VertexEdges vertex_edges(size_t V, const std::vector<EdgeBlock>& blocks) {
-  VertexEdges ve;
-  if (blocks.empty()) return ve;
-  ve.begin.assign(V + 1, 0);
-  for (const EdgeBlock& b : blocks)
-    if (b.used)
-      for (uint32_t v : b.idx) ++ve.begin[v + 1];
-  for (size_t v = 0; v < V; ++v) ve.begin[v + 1] += ve.begin[v];
-  ve.pair.resize(ve.begin.back());
-  std::vector<uint32_t> end(ve.begin.begin(), ve.begin.end() - 1);
-  for (uint32_t e = 0; e < blocks.size(); ++e)
-    if (blocks[e].used)
-      for (uint32_t i = 0; i < 4; ++i) ve.pair[end[blocks[e].idx[i]]++] = 4 * e + i;
-  return ve;
+Buckets vertex_edges(size_t V, const std::vector<EdgeBlock>& blocks) {
+  return bucket_sort(V, blocks.size(), 4, [&](size_t e, uint32_t i) { return blocks[e].used ? blocks[e].idx[i] : Buckets::kNone; });
 }
 
 // The system's rows, row si for vertex order[si], both triangles, columns sorted: each row's
@@ -634,7 +593,7 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   const Eigen::Index K = moments.rows.cols();
   const std::vector<FaceGeometry> geom = all_face_geometry(mesh, o.threads);
-  const VertexCorners corners = vertex_corners(mesh);
+  const Buckets corners = vertex_corners(mesh.triangles, mesh.num_vertices());
   const std::vector<uint32_t> by_rank = breadth_first_order(mesh, corners);
   std::vector<uint32_t> rank(static_cast<size_t>(V));
   for (uint32_t r = 0; r < by_rank.size(); ++r) rank[by_rank[r]] = r;
@@ -680,13 +639,13 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   parallel_range(live_edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) blocks[i] = edge_block(mesh, geom, edges[live_edges[i]], floor, o.alpha);
   });
-  blocks = in_row_order(std::move(blocks), sys.slot, n);  // (the used ones)
-  const VertexEdges vertex_blocks = vertex_edges(size_t(V), blocks);
+  blocks = in_row_order(blocks, sys.slot, n);  // (the used ones)
+  const Buckets vertex_blocks = vertex_edges(size_t(V), blocks);
   auto terms = [&](Eigen::Index si, auto&& add_term) {
     const uint32_t v = order[size_t(si)];
     auto add = [&](uint32_t j, double x) { add_term(sys.slot[j], j, x); };
-    const uint32_t* first = corners.corner.data() + corners.begin[v];
-    const uint32_t* last = corners.corner.data() + corners.begin[v + 1];
+    const uint32_t* first = corners.entry.data() + corners.begin[v];
+    const uint32_t* last = corners.entry.data() + corners.begin[v + 1];
     for (const uint32_t* h = first; h != last; ++h) {
       const size_t f = *h / 3;
       const int c = int(*h % 3);
@@ -710,8 +669,8 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
       }
     if (edge_term)
       for (uint32_t k = vertex_blocks.begin[v]; k < vertex_blocks.begin[v + 1]; ++k) {
-        const EdgeBlock& b = blocks[vertex_blocks.pair[k] / 4];
-        const uint32_t i = vertex_blocks.pair[k] % 4;
+        const EdgeBlock& b = blocks[vertex_blocks.entry[k] / 4];
+        const uint32_t i = vertex_blocks.entry[k] % 4;
         for (int j = 0; j < 4; ++j) add(b.idx[j], b.w * b.q[i] * b.q[j]);
       }
   };

@@ -37,6 +37,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "prtsub/prt/parallel.h"
+#include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
 
@@ -100,22 +101,28 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   held.values.resize(static_cast<Eigen::Index>(n_held), K);
   auto trace = [&](const std::vector<size_t>& which, bool keep_holdout) {
     const size_t n = which.size();
-    RowMatrixX3d points(static_cast<Eigen::Index>(n), 3), normals(static_cast<Eigen::Index>(n), 3), offsets(static_cast<Eigen::Index>(n), 3);
-    std::vector<uint64_t> streams(n);
+    const bool all = n == S;  // one stage: the pilot's own arrays and streams, no copies
+    RowMatrixX3d points, normals, offsets;
+    std::vector<uint64_t> streams;
+    if (!all) {
+      points.resize(static_cast<Eigen::Index>(n), 3), normals.resize(static_cast<Eigen::Index>(n), 3);
+      offsets.resize(static_cast<Eigen::Index>(n), 3), streams.resize(n);
+    }
     for (size_t j = 0; j < n; ++j) {
+      traced[which[j]] = 1;
+      if (all) continue;
       const auto k = static_cast<Eigen::Index>(which[j]), r = static_cast<Eigen::Index>(j);
       points.row(r) = pilot.points.row(k), normals.row(r) = pilot.normals.row(k), offsets.row(r) = pilot.offsets.row(k);
       streams[j] = to.stream_offset + which[j];
-      traced[which[j]] = 1;
     }
     std::vector<size_t> group_begin;
     for (size_t j = 0; j < n; j += 64) group_begin.push_back(j);
     group_begin.push_back(n);
     TransferOptions stage = to;
-    stage.streams = &streams;
+    if (!all) stage.streams = &streams;
     TransferStats stage_stats;
     shadowed_transfer_groups(
-        scene, points, normals, group_begin, stage,
+        scene, all ? pilot.points : points, all ? pilot.normals : normals, group_begin, stage,
         [&](size_t g, const double* values, const double* variance, size_t rows) {
           Eigen::VectorXd r(K);
           for (size_t i = 0; i < rows; ++i) {
@@ -138,7 +145,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
             excess[k] = r.squaredNorm() - v;
           }
         },
-        &stage_stats, progress, &offsets);
+        &stage_stats, progress, all ? &pilot.offsets : &offsets);
     stats.rays += stage_stats.rays;
   };
   trace(first, true);
@@ -169,16 +176,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
 
   // Each face pools the faces within `rings` vertex rings of it, each sample once, so the pooled
   // sum's noise is √(2Σv²) exactly as for one face.
-  std::vector<size_t> vf_begin(V + 1, 0), vf;  // vertex → faces
-  for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) ++vf_begin[t[c] + 1];
-  for (size_t i = 0; i < V; ++i) vf_begin[i + 1] += vf_begin[i];
-  vf.resize(vf_begin[V]);
-  {
-    std::vector<size_t> fill(vf_begin.begin(), vf_begin.end() - 1);
-    for (size_t f = 0; f < F; ++f)
-      for (int c = 0; c < 3; ++c) vf[fill[mesh.triangles[f][c]]++] = f;
-  }
+  const Buckets corners = vertex_corners(mesh.triangles, V);
   struct Pool {
     double sum = 0, v2 = 0, n = 0, sum1 = 0, n1 = 0;  // sum1, n1: the first ring's, for the density
     bool unsure = false;
@@ -199,8 +197,8 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     for (int r = 0; r < std::max(1, o.rings); ++r) {
       m.next.clear();
       for (size_t v : m.ring)
-        for (size_t j = vf_begin[v]; j < vf_begin[v + 1]; ++j) {
-          const size_t g = vf[j];
+        for (size_t j = corners.begin[v]; j < corners.begin[v + 1]; ++j) {
+          const size_t g = corners.entry[j] / 3;
           if (m.face[g] == tag) continue;
           m.face[g] = tag;
           p.sum += face_sum[g], p.v2 += face_v2[g], p.n += static_cast<double>(face_count[g]);

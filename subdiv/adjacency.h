@@ -32,6 +32,37 @@ struct EdgeAdjacency {
 //!        over (a mesh's render vertices to their welded positions); null: the indices themselves
 EdgeAdjacency edge_adjacency(const std::vector<Triangle>& triangles, const std::vector<uint32_t>* vertex_map = nullptr);
 
+//! Entries grouped by a key with a counting sort: bucket b holds entry[begin[b] .. begin[b+1]), in
+//! increasing entry order, entry = item·per_item + j. Linear in items and buckets; the same
+//! grouping however it is later read, so what is built on it is deterministic.
+struct Buckets {
+  static constexpr uint32_t kNone = UINT32_MAX;
+  std::vector<uint32_t> begin;  //!< buckets + 1
+  std::vector<uint32_t> entry;
+};
+
+//! \param key key(item, j) for j < per_item: a bucket below `buckets`, or Buckets::kNone to leave the entry out
+template <class Key>
+Buckets bucket_sort(size_t buckets, size_t items, uint32_t per_item, Key&& key) {
+  Buckets b;
+  b.begin.assign(buckets + 1, 0);
+  for (size_t i = 0; i < items; ++i)
+    for (uint32_t j = 0; j < per_item; ++j)
+      if (const uint32_t k = key(i, j); k != Buckets::kNone) ++b.begin[size_t(k) + 1];
+  for (size_t k = 0; k < buckets; ++k) b.begin[k + 1] += b.begin[k];
+  b.entry.resize(b.begin.back());
+  std::vector<uint32_t> end(b.begin.begin(), b.begin.end() - 1);
+  for (size_t i = 0; i < items; ++i)
+    for (uint32_t j = 0; j < per_item; ++j)
+      if (const uint32_t k = key(i, j); k != Buckets::kNone) b.entry[end[k]++] = static_cast<uint32_t>(i * per_item + j);
+  return b;
+}
+
+//! Each vertex's corners 3f + c (face f = corner / 3), in increasing order.
+inline Buckets vertex_corners(const std::vector<Triangle>& triangles, size_t vertices) {
+  return bucket_sort(vertices, triangles.size(), 3, [&](size_t f, uint32_t c) { return triangles[f][c]; });
+}
+
 //! Vertex at the tail (corner k) and head (corner k+1) of half-edge h, through the map.
 inline uint32_t half_edge_tail(const std::vector<Triangle>& t, uint32_t h) { return t[h / 3][h % 3]; }
 inline uint32_t half_edge_head(const std::vector<Triangle>& t, uint32_t h) { return t[h / 3][(h % 3 + 1) % 3]; }
