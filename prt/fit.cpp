@@ -164,7 +164,7 @@ void by_vertex_range(size_t V, int threads, Body&& body) {
 
 // Every vertex in breadth-first order over the faces (each component from its lowest vertex).
 // A scanned mesh's vertex order can be far from its faces' (armadillo: consecutive faces' first
-// vertices lie a median 25,000 apart); the fit works in this order instead, so that a vertex's
+// vertices lie a median 25,302 apart: bench/vertex_order.py); the fit works in this order instead, so that a vertex's
 // neighbours, and the faces around it, sit nearby in memory: in CG's passes over the rows and
 // in the assembly's walks over the faces.
 std::vector<uint32_t> breadth_first_order(const Mesh& mesh, const Buckets& corners) {
@@ -552,8 +552,8 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   return sums;
 }
 
-// Whether every value is finite, by row blocks in parallel: one core's pass over an armadillo's
-// moments takes a tenth of a second.
+// Whether every value is finite, by row blocks in parallel: the moments are the fit's largest
+// input, and Eigen's allFinite made a serial pass over them.
 bool all_finite(const RowMatrixXd& m, int threads) {
   std::atomic<bool> ok{true};
   parallel_range(m.rows(), threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
