@@ -18,6 +18,8 @@
 #include "cli/options.h"
 #include "cli/specs.h"
 #include "cli/report.h"
+#include "cli/pareto.h"
+#include "cli/plot.h"
 #include "prtsub/prt/evaluate.h"
 #include "prtsub/prt/lights.h"
 #include "prtsub/prt/render.h"
@@ -82,71 +84,17 @@ std::string fmt(double v, int digits = 4) {
   return b;
 }
 
-// A log-log line plot of named series of (x, y) points.
-std::string svg_plot(const std::map<std::string, std::vector<std::pair<double, double>>>& series, const std::string& xlabel,
-                     const std::string& ylabel) {
-  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (const auto& [name, pts] : series)
-    for (auto [x, y] : pts)
-      if (x > 0 && y > 0) x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
-  if (x0 > x1) return "<p>(no data)</p>";
-  auto pad = [](double& lo, double& hi) {
-    lo = std::pow(10, std::floor(std::log10(lo) * 4) / 4 - 0.05);
-    hi = std::pow(10, std::ceil(std::log10(hi) * 4) / 4 + 0.05);
-  };
-  pad(x0, x1), pad(y0, y1);
-  const double W = 560, H = 340, L = 70, R = 150, T = 20, B = 50;
-  auto px = [&](double x) { return L + (std::log10(x) - std::log10(x0)) / (std::log10(x1) - std::log10(x0)) * (W - L - R); };
-  auto py = [&](double y) { return H - B - (std::log10(y) - std::log10(y0)) / (std::log10(y1) - std::log10(y0)) * (H - T - B); };
-  static const char* colours[] = {"#222222", "#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
-  std::ostringstream o;
-  o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' font-size='11'>";
-  o << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='" << H - T - B << "' fill='none' stroke='#999'/>";
-  for (int e = static_cast<int>(std::floor(std::log10(x0))); e <= std::ceil(std::log10(x1)); ++e)
-    for (int m : {1, 2, 5}) {
-      double x = m * std::pow(10, e);
-      if (x < x0 || x > x1) continue;
-      o << "<line x1='" << px(x) << "' x2='" << px(x) << "' y1='" << T << "' y2='" << H - B << "' stroke='#eee'/>";
-      o << "<text x='" << px(x) << "' y='" << H - B + 14 << "' text-anchor='middle'>" << fmt(x, 3) << "</text>";
-    }
-  for (int e = static_cast<int>(std::floor(std::log10(y0))); e <= std::ceil(std::log10(y1)); ++e)
-    for (int m : {1, 2, 5}) {
-      double y = m * std::pow(10, e);
-      if (y < y0 || y > y1) continue;
-      o << "<line x1='" << L << "' x2='" << W - R << "' y1='" << py(y) << "' y2='" << py(y) << "' stroke='#eee'/>";
-      o << "<text x='" << L - 4 << "' y='" << py(y) + 4 << "' text-anchor='end'>" << fmt(y, 3) << "</text>";
-    }
-  o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << html_escape(xlabel) << "</text>";
-  o << "<text transform='rotate(-90)' x='" << -(T + H - B) / 2 << "' y='16' text-anchor='middle'>" << html_escape(ylabel) << "</text>";
-  int c = 0;
-  for (const auto& [name, pts] : series) {
-    const char* col = colours[c % 7];
-    std::vector<std::pair<double, double>> sorted = pts;
-    std::sort(sorted.begin(), sorted.end());
-    o << "<polyline fill='none' stroke='" << col << "' stroke-width='1.5' points='";
-    for (auto [x, y] : sorted)
-      if (x > 0 && y > 0) o << px(x) << "," << py(y) << " ";
-    o << "'/>";
-    for (auto [x, y] : sorted)
-      if (x > 0 && y > 0) o << "<circle cx='" << px(x) << "' cy='" << py(y) << "' r='3' fill='" << col << "'/>";
-    o << "<line x1='" << W - R + 10 << "' x2='" << W - R + 30 << "' y1='" << T + 12 + 16 * c << "' y2='" << T + 12 + 16 * c
-      << "' stroke='" << col << "' stroke-width='2'/><text x='" << W - R + 34 << "' y='" << T + 16 + 16 * c << "'>" << html_escape(name)
-      << "</text>";
-    ++c;
-  }
-  o << "</svg>";
-  return o.str();
-}
-
 struct CompareCli {
   BakeCli bake;
   std::string out_dir, budgets = "", estimates = "relative,shadow,curvature,length,probe,root", frame_size = "480,360";
   std::vector<std::string> lights;
   int max_levels = 4, eval_points = 20000, frame_rays = 256;
+  bool pareto = false;
+  std::string grid_rays = "64,256,1024", grid_samples = "0,4,16,64", grid_sample_rays = "4,16,64", targets;
 
   void add(ArgParser& args) {
     bake.add_common(args);
-    args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required)", &budgets);
+    args.option("--budgets", "T1,T2,...", "adaptive triangle budgets (required unless --pareto)", &budgets);
     args.option("--output", "DIR", "output directory (required; created)", &out_dir);
     args.alias("-o", "--output");
     args.option("--estimates", "LIST", "adaptive estimates to run [default relative,shadow,curvature,length,probe,root]", &estimates);
@@ -156,7 +104,38 @@ struct CompareCli {
     args.option("--light", "SPEC", "light of the frames [default sky and sun:1,3,2]", &lights);
     args.option("--frame-size", "W,H", "frame size [default 480,360]", &frame_size);
     args.option("--frame-rays", "R", "rays per pixel of the reference frame", &frame_rays, 1, 1 << 20);
+    args.flag("--pareto", "also bake the input unrefined under a grid of fixed settings, the default and --error targets: "
+              "error against bake seconds (DIR/pareto.csv, pareto.json)", &pareto);
+    args.option("--grid-rays", "R1,R2,...", "pareto: rays per vertex [default 64,256,1024]", &grid_rays);
+    args.option("--grid-samples", "S1,S2,...", "pareto: surface samples per triangle, 0 for point sampling [default 0,4,16,64]", &grid_samples);
+    args.option("--grid-sample-rays", "Q1,Q2,...", "pareto: rays per surface sample [default 4,16,64]", &grid_sample_rays);
+    args.option("--targets", "E1,E2,...", "pareto: --error targets in percent [default 0.9, 0.8 and 0.7 of the default's predicted error]",
+                &targets);
     bake.add_fit(args);
+  }
+
+  ParetoSpec pareto_spec() const {
+    ParetoSpec p;
+    p.vertex_rays.clear(), p.samples.clear(), p.sample_rays.clear();
+    for (double v : parse_numbers(grid_rays, "--grid-rays", 1, 1 << 20)) p.vertex_rays.push_back(static_cast<int>(v));
+    p.samples = parse_numbers(grid_samples, "--grid-samples", 0, 1e6);
+    for (double v : parse_numbers(grid_sample_rays, "--grid-sample-rays", 2, 1 << 20)) p.sample_rays.push_back(static_cast<int>(v));
+    if (!targets.empty()) p.targets = parse_numbers(targets, "--targets", 1e-6, 1e6);
+    return p;
+  }
+
+ private:
+  static std::vector<double> parse_numbers(const std::string& s, const char* option, double lo, double hi) {
+    std::vector<double> out;
+    for (const std::string& item : split(s)) {
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      if (item.empty() || end != item.c_str() + item.size() || !(v >= lo && v <= hi))
+        throw UsageError(std::string(option) + ": expected numbers in [" + fmt(lo) + ", " + fmt(hi) + "] separated by commas, got '" + s + "'");
+      out.push_back(v);
+    }
+    if (out.empty()) throw UsageError(std::string(option) + ": at least one value");
+    return out;
   }
 };
 
@@ -271,38 +250,50 @@ std::map<std::string, std::string> render_frames(const CompareCli& c, const Bake
   return images;
 }
 
-void write_page(const CompareCli& c, const BakeOptions& base, size_t source_faces, const Reference& ref, const std::vector<Row>& rows,
-                const std::map<std::string, std::string>& images, size_t frame_count) {
-  std::map<std::string, std::vector<std::pair<double, double>>> by_tri, by_time;
+// Plot series by name, in a fixed order: each gets its own colour and marker.
+std::vector<PlotSeries> series_of(const std::vector<Row>& rows, bool by_time) {
+  std::vector<PlotSeries> out;
   for (const Row& r : rows) {
     if (r.method == "none") continue;
     const std::string name = (r.method == "adaptive" ? "adaptive " + r.estimate : r.method) + (r.fit == "point" ? "" : " " + r.fit);
-    by_tri[name].push_back({double(r.triangles), r.rms});
-    by_time[name].push_back({r.seconds, r.rms});
+    auto it = std::find_if(out.begin(), out.end(), [&](const PlotSeries& s) { return s.name == name; });
+    if (it == out.end()) it = out.insert(out.end(), PlotSeries{name, {}, true, 4, false});
+    it->points.push_back({by_time ? r.seconds : double(r.triangles), r.rms});
   }
+  return out;
+}
+
+void write_page(const CompareCli& c, const BakeOptions& base, size_t source_faces, const Reference& ref, const std::vector<Row>& rows,
+                const std::map<std::string, std::string>& images, size_t frame_count, const std::string& pareto_html) {
   const std::string& input = c.bake.input;
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset='utf-8'><title>prtsub compare: " << html_escape(input) << "</title>"
        << "<style>body{font-family:sans-serif;margin:24px;color:#222}table{border-collapse:collapse}td,th{padding:3px 10px;"
           "border-bottom:1px solid #ddd;text-align:right}th{background:#f4f4f4}td:first-child,td:nth-child(2){text-align:left}"
           "figure{display:inline-block;margin:6px}figcaption{font-size:12px;max-width:480px}</style></head><body>";
-  html << "<h1>Uniform against adaptive refinement</h1><p>Input <code>" << html_escape(input) << "</code>, " << source_faces
-       << " triangles. Order " << base.transfer.order << ", " << base.transfer.rays << " rays per vertex, seed " << base.transfer.seed
+  html << "<h1>" << (rows.empty() ? "Rays and samples" : "Uniform against adaptive refinement") << "</h1><p>Input <code>"
+       << html_escape(input) << "</code>, " << source_faces << " triangles. Order " << base.transfer.order << ", "
+       << base.transfer.rays << " rays per vertex, seed " << base.transfer.seed
        << ". Error: surface RMS of ‖g − t<sub>ref</sub>‖ / ‖t<sub>unshadowed</sub>‖ at " << ref.points.rows()
        << " seeded area-stratified points, reference " << ref.rays << " rays (its own noise floor " << fmt(100 * ref.noise_floor, 3)
-       << "%). Vertex values: point sampled, and for uniform and the default estimate also "
-       << fit_method_name(base.fit.method)
-       << (base.fit.method == FitMethod::LeastSquares ? " (alpha " + fmt(base.fit.alpha, 3) + ", " + regularizer_name(base.fit.regularizer) + " regulariser)" : std::string())
-       << " from " << fmt(base.samples.per_triangle, 3) << " surface samples per triangle with " << base.sample_rays
-       << " rays each; a fitted run's time includes its samples and solve.</p>";
-  html << "<h2>Error against triangles</h2>" << svg_plot(by_tri, "triangles", "RMS error (%)");
-  html << "<h2>Error against bake time</h2>" << svg_plot(by_time, "bake seconds", "RMS error (%)");
-  html << "<h2>Runs</h2><table><tr><th>method</th><th>estimate</th><th>fit</th><th>triangles</th><th>vertices</th><th>RMS %</th>"
-          "<th>p95 %</th><th>seconds</th></tr>";
-  for (const Row& r : rows)
-    html << "<tr><td>" << r.method << "</td><td>" << r.estimate << "</td><td>" << r.fit << "</td><td>" << r.triangles << "</td><td>"
-         << r.vertices << "</td><td>" << fmt(r.rms) << "</td><td>" << fmt(r.p95) << "</td><td>" << fmt(r.seconds, 3) << "</td></tr>";
-  html << "</table>";
+       << "%).";
+  if (!rows.empty())
+    html << " Vertex values: point sampled, and for uniform and the default estimate also " << fit_method_name(base.fit.method)
+         << (base.fit.method == FitMethod::LeastSquares ? " (alpha " + fmt(base.fit.alpha, 3) + ", " + regularizer_name(base.fit.regularizer) + " regulariser)" : std::string())
+         << " from " << fmt(base.samples.per_triangle, 3) << " surface samples per triangle with " << base.sample_rays
+         << " rays each; a fitted run's time includes its samples and solve.";
+  html << "</p>";
+  if (!rows.empty()) {
+    html << "<h2>Error against triangles</h2>" << svg_loglog(series_of(rows, false), "triangles", "RMS error (%)");
+    html << "<h2>Error against bake time</h2>" << svg_loglog(series_of(rows, true), "bake seconds", "RMS error (%)");
+    html << "<h2>Runs</h2><table><tr><th>method</th><th>estimate</th><th>fit</th><th>triangles</th><th>vertices</th><th>RMS %</th>"
+            "<th>p95 %</th><th>seconds</th></tr>";
+    for (const Row& r : rows)
+      html << "<tr><td>" << r.method << "</td><td>" << r.estimate << "</td><td>" << r.fit << "</td><td>" << r.triangles << "</td><td>"
+           << r.vertices << "</td><td>" << fmt(r.rms) << "</td><td>" << fmt(r.p95) << "</td><td>" << fmt(r.seconds, 3) << "</td></tr>";
+    html << "</table>";
+  }
+  html << pareto_html;
   if (!images.empty()) {
     html << "<h2>Relit frames</h2><p>Frames at " << frame_count << " triangles under " << html_escape(c.lights[0])
          << (c.lights.size() > 1 ? " + " + html_escape(c.lights[1]) : "") << "; the reference computes transfer at every pixel ("
@@ -310,7 +301,8 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
     for (const auto& [caption, png] : images)
       html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << html_escape(caption) << "</figcaption></figure>";
   }
-  html << "<p style='font-size:12px;color:#666'>Made by <code>prtsub compare</code>; results.csv and results.json hold the same table.</p></body></html>\n";
+  html << "<p style='font-size:12px;color:#666'>Made by <code>prtsub compare</code>; results.csv and results.json"
+       << (pareto_html.empty() ? "" : " (refinement), pareto.csv and pareto.json (speed against error)") << " hold the same tables.</p></body></html>\n";
   write_file_atomically(c.out_dir + "/report.html", html.str());
 }
 
@@ -321,12 +313,15 @@ int cmd_compare(int argc, char** argv) {
   ArgParser args("compare",
                  "Bakes INPUT with uniform refinement (OpenSubdiv, linear) and with adaptive refinement under every\n"
                  "estimate, evaluates each against one reference, and writes DIR/results.csv, DIR/results.json and\n"
-                 "DIR/report.html (table, log-log plots of error against triangles and against time, relit frames).");
+                 "DIR/report.html (table, log-log plots of error against triangles and against time, relit frames).\n"
+                 "With --pareto, also bakes the input under a grid of fixed ray and sample settings, the default and\n"
+                 "--error targets, and shows each against the grid's best error at the same bake time.");
   c.add(args);
   if (!args.parse(argc, argv, 2)) return 0;
-  if (c.budgets.empty()) throw UsageError("compare: missing --budgets T1,T2,...");
+  if (c.budgets.empty() && !c.pareto) throw UsageError("compare: missing --budgets T1,T2,... (or --pareto)");
   if (c.out_dir.empty()) throw UsageError("compare: missing -o DIR");
-  const std::vector<size_t> budgets = parse_budgets(c.budgets);
+  const std::vector<size_t> budgets = c.budgets.empty() ? std::vector<size_t>() : parse_budgets(c.budgets);
+  const ParetoSpec pareto = c.pareto_spec();
   std::vector<EdgeEstimate> estimates;
   for (const std::string& e : split(c.estimates)) {
     try {
@@ -345,7 +340,7 @@ int cmd_compare(int argc, char** argv) {
     std::filesystem::create_directories(c.out_dir, ec);
     if (ec) throw IoError(c.out_dir + ": cannot create directory (" + ec.message() + ")");
   }
-  check_writable(c.out_dir + "/results.csv");
+  check_writable(c.out_dir + "/report.html");
   if (!c.bake.report.empty()) check_writable(c.bake.report);
 
   const Stopwatch clock;
@@ -363,7 +358,8 @@ int cmd_compare(int argc, char** argv) {
   std::printf("  reference noise floor %.3f%%\n", 100 * ref.noise_floor);
 
   size_t frame_count = 0;
-  const std::vector<BakeOptions> plan = plan_runs(base, source.num_faces(), budgets, estimates, c.max_levels, frame_count);
+  const std::vector<BakeOptions> plan =
+      budgets.empty() ? std::vector<BakeOptions>() : plan_runs(base, source.num_faces(), budgets, estimates, c.max_levels, frame_count);
   std::vector<Row> rows;
   std::map<std::string, BakeResult> keep;  // runs whose frames the page shows
   for (size_t i = 0; i < plan.size(); ++i) {
@@ -380,16 +376,28 @@ int cmd_compare(int argc, char** argv) {
       keep.emplace(key, std::move(r));
     }
   }
-  write_tables(c.out_dir, c.bake.input, base, ref, rows);
+  std::vector<ParetoRun> pareto_runs;
+  const std::string pareto_html = c.pareto ? run_pareto(source, base, pareto, ref, c.out_dir, pareto_runs) : std::string();
+  if (!plan.empty()) write_tables(c.out_dir, c.bake.input, base, ref, rows);
   const std::map<std::string, std::string> images =
       keep.empty() ? std::map<std::string, std::string>() : render_frames(c, base, source, source_scene, keep);
-  write_page(c, base, source.num_faces(), ref, rows, images, frame_count);
-  std::printf("  wrote %s/results.csv, results.json and report.html (%.1f s)\n", c.out_dir.c_str(), clock.total());
+  write_page(c, base, source.num_faces(), ref, rows, images, frame_count, pareto_html);
+  std::printf("  wrote %s/%sreport.html (%.1f s)\n", c.out_dir.c_str(),
+              (std::string(plan.empty() ? "" : "results.csv, results.json, ") + (c.pareto ? "pareto.csv, pareto.json, " : "")).c_str(),
+              clock.total());
   if (!c.bake.report.empty()) {
     Report r;
     r.set("command", "compare");
     r.set("input", c.bake.input);
     r.set("runs", rows.size());
+    if (c.pareto) {
+      r.set("pareto_runs", pareto_runs.size());
+      // Each of the tool's own runs against the grid's front at its time: the worst ratio.
+      double worst = 0;
+      for (const ParetoRun& p : pareto_runs)
+        if (p.series != "grid" && std::isfinite(p.front_rms)) worst = std::max(worst, p.rms / p.front_rms);
+      r.set("pareto_worst_ratio_to_front", worst);
+    }
     r.set("seconds_total", clock.total());
     r.set("noise_floor_percent", 100 * ref.noise_floor);
     r.write(c.bake.report);
