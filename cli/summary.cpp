@@ -147,6 +147,9 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("target_error_percent", o.target_error);
     r.set("target_rays", res.target_rays);
     r.set("target_rounds", res.target_rounds);
+    r.set("target_samples", static_cast<uint64_t>(res.target_samples));
+    r.set("target_sample_rays", res.target_sample_rays);
+    r.set("target_sample_rounds", res.target_sample_rounds);
     r.set("seconds_target", res.seconds_target);
   }
   if (o.signal == AssetSignal::Ao) r.set("clamped_values", res.clamped);
@@ -221,8 +224,8 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
                      "on {predicted_error_samples} held-out pilot samples: what prtsub eval should find"});
   if (r.has("target_error_percent"))
-    r.print(stdout, {"              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds "
-                     "({seconds_target:3} s)"});
+    r.print(stdout, {"              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds, "
+                     "{target_samples} more samples in {target_sample_rounds} ({seconds_target:3} s)"});
   r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)",
                    "  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "
                    "{seconds_transfer:3}, refine {seconds_refine:3}, samples {seconds_samples:3}, vertex rays {seconds_top_up:3}, fit {seconds_fit:3}, write "

@@ -145,7 +145,8 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
       m.push_back({"predicted_error", buf});
       if (o.target_error > 0)
         m.push_back({"target_error", std::to_string(o.target_error) + "% (" + std::to_string(r.target_rays) + " more vertex rays in " +
-                                         std::to_string(r.target_rounds) + " rounds)"});
+                                         std::to_string(r.target_rounds) + " rounds, " + std::to_string(r.target_samples) +
+                                         " more samples in " + std::to_string(r.target_sample_rounds) + ")"});
       m.push_back({"pilot_samples", std::to_string(r.fit_data.plan.pilot_samples) + " (" + std::to_string(o.pilot.rays) + " rays each)"});
       m.push_back({"sampled_faces", std::to_string(r.fit_data.plan.sampled_faces)});
       m.push_back({"extra_vertex_rays", std::to_string(r.top_up.rays) + " at " + std::to_string(r.top_up.vertices) + " vertices"});
@@ -215,11 +216,38 @@ RowMatrixXd asset_values(const BakeOptions& o, const RowMatrixXd& values) {
   return v;
 }
 
-// --error E: more vertex rays until the hold-out error is at most E. The vertices' noise part of
-// the squared error is N² = Σ_i w_i var_i / 2A (∫_f h_c² = a_f/6, w_i a third of the area around
-// vertex i); the rest of the measured E² is interpolation error, which vertex rays do not lower.
-// If E is above it, each round plans the water-filling budget whose planned noise meets
-// E² − (E_now² − N²), traces it with a seed of its own, fits again and measures again.
+// A sample round of --error: three times the fit's samples again, on the faces the pilot chose
+// and by its weights, with seeds of their own, merged into the samples the fit has (face by
+// face, count-weighted: still unbiased). Returns the samples added.
+size_t add_samples(const RayScene& scene, const BakeOptions& o, int round, const BakeProgress& progress, BakeResult& r) {
+  FitData& d = r.fit_data;
+  SampleOptions so = o.samples;
+  so.density = 0;
+  so.per_triangle = 3.0 * double(d.samples.size()) / double(std::max<size_t>(r.mesh.num_faces(), 1));
+  so.seed = mix64(o.samples.seed + 0x51A7ull + uint64_t(round));
+  const SurfaceSamples more = make_surface_samples(r.mesh, so, d.plan.face_weight);
+  TransferOptions to = o.transfer;
+  to.rays = o.sample_rays;
+  to.seed = mix64(mix64(o.transfer.seed ^ 0x5A3D1E5ull) + uint64_t(round));  // independent of every earlier ray
+  to.stream_offset = 0;
+  if (progress.stage) progress.stage("error target", more.size());
+  TransferStats stats;
+  const FaceMoments m = trace_face_moments(r.mesh, scene, more, to, &stats, progress.add);
+  d.moments = merge_face_moments(d.samples, d.moments, more, m);
+  d.samples = merge_surface_samples(d.samples, more);
+  d.rays += stats.rays, r.rays += stats.rays, r.target_sample_rays += stats.rays;
+  return more.size();
+}
+
+// --error E: more vertex rays, or more samples, until the hold-out error is at most E. The
+// vertices' noise part of the squared error is N² = Σ_i w_i var_i / 2A (∫_f h_c² = a_f/6, w_i a
+// third of the area around vertex i); the rest of the measured E² is interpolation error, which
+// vertex rays do not lower. If E is above it, a round plans the water-filling budget whose
+// planned noise meets E² − (E_now² − N²) and traces it, continuing each vertex's lattice. If not,
+// a round gives the fit four times the samples on the faces the pilot chose, until a round
+// lowers the error by less than 3% (what is left is the piecewise-linear interpolant's own limit,
+// or sits on faces the pilot left to interpolation: refinement's job). Each round fits again and
+// measures again on the hold-out samples.
 void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
   if (r.fit_data.allocation != SampleAllocation::Pilot) {
     r.warnings.push_back("--error needs the pilot's held-out samples to measure the error; ignored with this sample allocation");
@@ -230,18 +258,29 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
   for (double a : w) area += a;
   const double unit = unshadowed_norm(o.transfer.order) / 100, target2 = std::pow(o.target_error * unit, 2);
   const double max_rays = 64.0 * o.transfer.rays;
-  for (int round = 1; round <= 4 && r.predicted.percent > o.target_error; ++round) {
+  const int kMaxSampleRounds = 2;
+  bool samples_spent = r.fit_data.plan.sampled_faces == 0;
+  for (int round = 1; round <= 6 && r.predicted.percent > o.target_error; ++round) {
     double noise2 = 0;
     for (size_t i = 0; i < w.size(); ++i)
       if (std::isfinite(r.point_variance[i])) noise2 += w[i] * r.point_variance[i];
     noise2 /= 2 * std::max(area, 1e-300);
     const double bias2 = std::max(0.0, std::pow(r.predicted.percent * unit, 2) - noise2);
     if (target2 <= 1.02 * bias2) {
-      char buf[200];
-      std::snprintf(buf, sizeof buf, "--error %g: %.3f%% of the error is interpolation, which more vertex rays do not lower; refine "
-                    "(--refine adaptive --budget) or sample more (--pilot-significance)", o.target_error, std::sqrt(bias2) / unit);
-      r.warnings.push_back(buf);
-      break;
+      if (samples_spent || r.target_sample_rounds >= kMaxSampleRounds) {
+        char buf[260];
+        std::snprintf(buf, sizeof buf, "--error %g: %.3f%% of the error is interpolation, which more vertex rays do not lower%s; refine "
+                      "(--refine adaptive --budget) or sample more faces (--pilot-significance)", o.target_error, std::sqrt(bias2) / unit,
+                      r.target_sample_rounds ? " and more samples no longer did" : "");
+        r.warnings.push_back(buf);
+        break;
+      }
+      const double before = r.predicted.percent;
+      r.target_samples += add_samples(scene, o, ++r.target_sample_rounds, progress, r);
+      r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
+      r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
+      samples_spent = r.predicted.percent > 0.97 * before;
+      continue;
     }
     const double want = 2 * area * (target2 - bias2);  // Σ w var the noise may have
     const std::vector<double> planning = smoothed_variance(r.mesh, r.point_variance, r.vertex_rays);
@@ -291,7 +330,10 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions
     if (progress.stage) progress.stage("pilot", pilot.size());
     d.plan = plan_samples(mesh, scene, pilot, *prior, *prior_variance, pilot_rays, o.pilot, progress.add);
     // The sampled faces' pilot samples count towards their share of the budget, up to half of it.
-    const double budget = so.density > 0 ? so.density * d.plan.sampled_area : so.per_triangle * double(d.plan.sampled_faces);
+    // The budget has the pilot's floor: on a coarse mesh a face crossed by a shadow needs many
+    // samples to place it, and a few thousand cost nothing against a bake's fixed costs.
+    double budget = so.density > 0 ? so.density * d.plan.sampled_area : so.per_triangle * double(d.plan.sampled_faces);
+    if (d.plan.sampled_faces > 0) budget = std::max(budget, static_cast<double>(o.pilot.min_samples));
     const double wanted = std::max(0.5 * budget, budget - o.pilot.per_triangle * double(d.plan.sampled_faces));
     so.density = 0;
     so.per_triangle = mesh.num_faces() ? std::max(0.0, wanted) / double(mesh.num_faces()) : 0;

@@ -51,8 +51,9 @@ struct BakeOptions {
   //! Pilot: the share of the sample rays the pilot saved (against sampling every face) that goes
   //! to more rays at the noisiest vertices instead (top_up_vertices); 0 keeps them unspent
   double vertex_share = 0.5;
-  //! --error: when > 0 (percent, eval's unit), trace more vertex rays until the error measured on
-  //! the pilot's held-out samples is at most this (needs Pilot allocation)
+  //! --error: when > 0 (percent, eval's unit), trace more vertex rays, or give the fit more samples
+  //! where interpolation is what is left, until the error measured on the pilot's held-out
+  //! samples is at most this (needs Pilot allocation)
   double target_error = 0;
   //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
   int sample_rays = 16;
@@ -88,8 +89,11 @@ struct BakeResult {
   //! would report; all 0 otherwise)
   ErrorEstimate predicted;
   std::vector<double> vertex_rays;  //!< #V: rays traced at each vertex, all rounds
-  uint64_t target_rays = 0;         //!< --error: the rays its rounds added
-  int target_rounds = 0;
+  uint64_t target_rays = 0;         //!< --error: the vertex rays its rounds added
+  int target_rounds = 0;            //!< --error: rounds of vertex rays
+  int target_sample_rounds = 0;     //!< --error: rounds of more samples
+  size_t target_samples = 0;        //!< --error: the samples they added ...
+  uint64_t target_sample_rays = 0;  //!< ... and their rays
   FitStats fit;
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
   uint64_t rays = 0;     //!< every transfer ray traced

@@ -435,6 +435,23 @@ void sample_moments(const SurfaceSamples& s, size_t first, size_t last, const do
     }
 }
 
+FaceMoments merge_face_moments(const SurfaceSamples& a, const FaceMoments& ma, const SurfaceSamples& b, const FaceMoments& mb) {
+  const size_t F = a.begin.empty() ? 0 : a.begin.size() - 1;
+  if (b.begin.size() != a.begin.size() || size_t(ma.rows.rows()) != 3 * F || size_t(mb.rows.rows()) != 3 * F ||
+      ma.rows.cols() != mb.rows.cols() || ma.variance.size() != mb.variance.size())
+    throw InputError("fit: cannot merge the moments of different sample sets");
+  FaceMoments m{RowMatrixXd(ma.rows.rows(), ma.rows.cols()), std::vector<double>(ma.variance.size(), 0.0)};
+  for (size_t f = 0; f < F; ++f) {
+    const double na = double(a.begin[f + 1] - a.begin[f]), nb = double(b.begin[f + 1] - b.begin[f]);
+    const double wa = na + nb > 0 ? na / (na + nb) : 0, wb = na + nb > 0 ? nb / (na + nb) : 0;
+    const auto r = static_cast<Eigen::Index>(3 * f);
+    m.rows.middleRows(r, 3) = wa * ma.rows.middleRows(r, 3) + wb * mb.rows.middleRows(r, 3);
+    if (!m.variance.empty())
+      for (size_t k = 3 * f; k < 3 * f + 3; ++k) m.variance[k] = wa * wa * ma.variance[k] + wb * wb * mb.variance[k];
+  }
+  return m;
+}
+
 FaceMoments face_moments(const Mesh& mesh, const SurfaceSamples& s, const RowMatrixXd& values) {
   check_samples(mesh, s);
   if (static_cast<size_t>(values.rows()) != s.size()) throw InputError("fit: one row of values per sample expected");

@@ -109,6 +109,11 @@ struct FaceMoments {
 void sample_moments(const SurfaceSamples& samples, size_t first, size_t last, const double* values, Eigen::Index K,
                     double* out);
 
+//! The moments of two sample sets as those of their union (merge_surface_samples(a, b)): face by
+//! face the count-weighted mean of the two estimates, and its variance.
+//! \throw InputError for shapes that do not match
+FaceMoments merge_face_moments(const SurfaceSamples& a, const FaceMoments& ma, const SurfaceSamples& b, const FaceMoments& mb);
+
 //! Every face's moments from stored sample values.
 //! \param values #S by K, the signal at the samples
 FaceMoments face_moments(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values);

@@ -22,7 +22,8 @@ const char* sample_allocation_name(SampleAllocation a);
 struct PilotOptions {
   double per_triangle = 2;  //!< pilot samples per triangle (one each from 1 up, the rest by area; below 1 by area) ...
   //! ... and at least this many in all: a coarse mesh's large faces need several each to show a
-  //! shadow inside them, and on a small mesh they cost nothing
+  //! shadow inside them, and on a small mesh they cost nothing. The fit's samples have the same
+  //! floor, over the faces the pilot gives any.
   size_t min_samples = 4096;
   //! rays per pilot sample: its test weighs ‖r‖² against the noise v, whose spread falls as
   //! 1/rays but only as 1/√samples, so a few well-traced samples find more than many noisy ones

@@ -106,4 +106,38 @@ SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o, co
   return s;
 }
 
+SurfaceSamples merge_surface_samples(const SurfaceSamples& a, const SurfaceSamples& b) {
+  if (a.begin.size() != b.begin.size() || a.begin.empty()) throw InputError("samples: cannot merge sample sets of different meshes");
+  const size_t F = a.begin.size() - 1;
+  SurfaceSamples s;
+  s.begin.assign(F + 1, 0);
+  for (size_t f = 0; f < F; ++f) s.begin[f + 1] = s.begin[f] + (a.begin[f + 1] - a.begin[f]) + (b.begin[f + 1] - b.begin[f]);
+  const size_t S = s.begin[F];
+  const auto n = static_cast<Eigen::Index>(S);
+  s.points.resize(n, 3), s.normals.resize(n, 3), s.offsets.resize(n, 3), s.barycentric.resize(n, 3);
+  s.face.resize(S), s.weight.resize(S);
+  for (size_t f = 0; f < F; ++f) {
+    const size_t na = a.begin[f + 1] - a.begin[f], nb = b.begin[f + 1] - b.begin[f];
+    if (na + nb == 0) continue;
+    // The face's area from either set's weights: weight × count is the area.
+    const double area = na ? a.weight[a.begin[f]] * double(na) : b.weight[b.begin[f]] * double(nb);
+    size_t k = s.begin[f];
+    for (const auto* src : {&a, &b})
+      for (size_t j = src->begin[f]; j < src->begin[f + 1]; ++j, ++k) {
+        const auto r = static_cast<Eigen::Index>(j), t = static_cast<Eigen::Index>(k);
+        s.points.row(t) = src->points.row(r), s.normals.row(t) = src->normals.row(r);
+        s.offsets.row(t) = src->offsets.row(r), s.barycentric.row(t) = src->barycentric.row(r);
+        s.face[k] = static_cast<uint32_t>(f);
+        s.weight[k] = area / double(na + nb);
+      }
+  }
+  const std::vector<char>& flags = a.interpolated.empty() ? b.interpolated : a.interpolated;
+  if (!flags.empty()) {
+    s.interpolated = flags;
+    for (size_t f = 0; f < F; ++f)
+      if (s.begin[f + 1] > s.begin[f]) s.interpolated[f] = 0;
+  }
+  return s;
+}
+
 }  // namespace prtsub

@@ -45,4 +45,11 @@ SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& optio
 //! \throw InputError for a weight vector of the wrong size or a negative or non-finite weight
 SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& options, const std::vector<double>& face_weight);
 
+//! Two sample sets on one mesh as one: face f's samples are a's then b's, each weighted by the
+//! face's area over their total count, so a moment sum over the merged set is the count-weighted
+//! mean of the two sets' estimates (each unbiased, so the merge is). `interpolated` is a's, or
+//! b's when a has none; a face counts as interpolated only while neither set samples it.
+//! \throw InputError when the two were made for different face counts
+SurfaceSamples merge_surface_samples(const SurfaceSamples& a, const SurfaceSamples& b);
+
 }  // namespace prtsub

@@ -10,6 +10,7 @@
 #include <mutex>
 
 #include "helpers.h"
+#include "prtsub/prt/evaluate.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/version.h"
@@ -104,6 +105,37 @@ TEST(Bake, AnErrorTargetAddsVertexRaysUntilTheHeldOutErrorMeetsIt) {
   EXPECT_NE(unreachable.warnings.back().find("--error"), std::string::npos);
   o.target_error = -1;
   EXPECT_THROW(bake(mesh, o), InputError);
+}
+
+TEST(Bake, AnErrorTargetThatInterpolationHoldsUpGivesTheFitMoreSamples) {
+  // A sphere on a ground of two triangles, 256 rays per vertex: what is left is the contact
+  // shadow inside the big ground faces, which vertex rays do not lower and samples do. The fit
+  // starts starved (one sample per face) so that more of them matter.
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.transfer.rays = 256, o.samples.per_triangle = 1, o.pilot.min_samples = 64, o.vertex_share = 0;
+  const BakeResult plain = bake(mesh, o);
+  ASSERT_GT(plain.predicted.percent, 0.0);
+  o.target_error = 0.9 * plain.predicted.percent;
+  const BakeResult more = bake(mesh, o);
+  EXPECT_GE(more.target_sample_rounds, 1);
+  EXPECT_GT(more.target_samples, 3 * plain.fit_data.samples.size() - 1);  // the first round triples them
+  EXPECT_EQ(more.fit_data.samples.size(), plain.fit_data.samples.size() + more.target_samples);
+  EXPECT_EQ(more.rays, plain.rays + more.target_rays + more.target_sample_rays);
+  EXPECT_EQ(more.target_sample_rays, uint64_t(o.sample_rays) * more.target_samples);
+  EXPECT_LT(more.predicted.percent, plain.predicted.percent);
+  // Judged independently, on a reference of its own: the asset is better, not just its estimate.
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  ReferenceOptions ro;
+  ro.points = 4000, ro.rays = 1024;
+  const Reference ref = make_reference(mesh, scene, ro);
+  const double e_plain = evaluate(ref, vertex_positions(plain.mesh), plain.mesh.triangles, plain.mesh.source_face, plain.transfer).rms_percent;
+  const double e_more = evaluate(ref, vertex_positions(more.mesh), more.mesh.triangles, more.mesh.source_face, more.transfer).rms_percent;
+  EXPECT_LT(e_more, 0.97 * e_plain) << e_plain;
+  // Thread counts do not change the rounds.
+  o.transfer.threads = 1;
+  const BakeResult one = bake(mesh, o);
+  EXPECT_EQ((one.transfer - more.transfer).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {

@@ -145,6 +145,52 @@ TEST(SurfaceSamples, FaceWeightsSteerTheExtraSamplesAndWeightZeroLeavesAFaceToIn
   EXPECT_THROW(make_surface_samples(m, o, w), InputError);
 }
 
+// Two sample sets merged (the sample rounds of --error): the merged set is what one set with
+// both sets' points would be, and the merged moments are the moments computed on it directly.
+TEST(SurfaceSamples, TwoSetsMergeIntoOneWhoseMomentsAreTheCountWeightedMean) {
+  Mesh m = test::build(test::grid(5, 0.4));
+  std::vector<double> w(m.num_faces());
+  for (size_t f = 0; f < w.size(); ++f) w[f] = f % 4 == 0 ? 0.0 : 1.0 + double(f % 3);
+  SampleOptions o;
+  o.per_triangle = 3, o.seed = 1;
+  const SurfaceSamples a = make_surface_samples(m, o, w);
+  o.per_triangle = 11, o.seed = 2;
+  const SurfaceSamples b = make_surface_samples(m, o, w);
+  const SurfaceSamples ab = merge_surface_samples(a, b);
+  ASSERT_EQ(ab.size(), a.size() + b.size());
+  const Signal f = sigmoid;
+  const RowMatrixXd va = at_samples(a, f), vb = at_samples(b, f), vab = at_samples(ab, f);
+  for (size_t t = 0; t < m.num_faces(); ++t) {
+    const size_t na = a.begin[t + 1] - a.begin[t], nb = b.begin[t + 1] - b.begin[t];
+    ASSERT_EQ(ab.begin[t + 1] - ab.begin[t], na + nb);
+    EXPECT_EQ(ab.interpolated[t] != 0, w[t] == 0) << t;
+    double wsum = 0;
+    for (size_t k = ab.begin[t]; k < ab.begin[t + 1]; ++k) {
+      EXPECT_EQ(ab.face[k], t);
+      wsum += ab.weight[k];
+    }
+    if (na + nb) {
+      const Triangle& tr = m.triangles[t];
+      EXPECT_NEAR(wsum, triangle_area(m.point(tr[0]), m.point(tr[1]), m.point(tr[2])), 1e-12);
+    }
+    if (nb) {
+      EXPECT_EQ(ab.points.row(Eigen::Index(ab.begin[t] + na)), b.points.row(Eigen::Index(b.begin[t])));  // a's, then b's
+    }
+  }
+  FaceMoments ma = face_moments(m, a, va), mb = face_moments(m, b, vb);
+  ma.variance.assign(3 * m.num_faces(), 2.0), mb.variance.assign(3 * m.num_faces(), 1.0);
+  const FaceMoments merged = merge_face_moments(a, ma, b, mb), direct = face_moments(m, ab, vab);
+  EXPECT_LT((merged.rows - direct.rows).cwiseAbs().maxCoeff(), 1e-12 * direct.rows.cwiseAbs().maxCoeff());
+  for (size_t t = 0; t < m.num_faces(); ++t) {
+    const double na = double(a.begin[t + 1] - a.begin[t]), nb = double(b.begin[t + 1] - b.begin[t]);
+    if (na + nb == 0) continue;
+    EXPECT_NEAR(merged.variance[3 * t], (na * na * 2 + nb * nb * 1) / ((na + nb) * (na + nb)), 1e-12) << t;
+  }
+  SurfaceSamples other = make_surface_samples(test::build(test::grid(3, 0.4)), o);
+  EXPECT_THROW(merge_surface_samples(a, other), InputError);
+  EXPECT_THROW(merge_face_moments(a, ma, other, mb), InputError);
+}
+
 TEST(SurfaceSamples, DensityModeAndZeroAreaFaces) {
   RawMesh r = test::grid(4, 0);
   // A zero-area face (three collinear points) beside the grid.
