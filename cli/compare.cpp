@@ -301,8 +301,10 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
     for (const auto& [caption, png] : images)
       html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << html_escape(caption) << "</figcaption></figure>";
   }
-  html << "<p style='font-size:12px;color:#666'>Made by <code>prtsub compare</code>; results.csv and results.json"
-       << (pareto_html.empty() ? "" : " (refinement), pareto.csv and pareto.json (speed against error)") << " hold the same tables.</p></body></html>\n";
+  const std::string tables = rows.empty() ? "pareto.csv and pareto.json"
+                            : pareto_html.empty() ? "results.csv and results.json"
+                                                  : "results.csv and results.json (refinement), pareto.csv and pareto.json (speed against error)";
+  html << "<p style='font-size:12px;color:#666'>Made by <code>prtsub compare</code>; " << tables << " hold the same tables.</p></body></html>\n";
   write_file_atomically(c.out_dir + "/report.html", html.str());
 }
 

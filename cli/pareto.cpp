@@ -164,7 +164,9 @@ std::string run_pareto(const Mesh& source, const BakeOptions& base, const Pareto
   ParetoRun d;
   d.series = "default", d.label = "default", d.options = base;
   runs.insert(runs.begin(), d);
-  const size_t total_guess = runs.size() + (spec.targets.empty() ? 3 : spec.targets.size());
+  // The default targets come from the default run's prediction, which only a pilot bake makes.
+  const bool predicts = base.fit.method != FitMethod::Point && base.allocation == SampleAllocation::Pilot;
+  const size_t total_guess = runs.size() + (!spec.targets.empty() ? spec.targets.size() : predicts ? 3 : 0);
   auto report = [&](size_t i) {
     const ParetoRun& r = runs[i];
     std::printf("  [%zu/%zu] %-22s %10.3f s  %14llu rays  RMS %7.3f%%\n", i + 1, total_guess, r.label.c_str(), r.seconds,
