@@ -284,16 +284,7 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
     }
     const double want = 2 * area * (target2 - bias2);  // Σ w var the noise may have
     const std::vector<double> planning = smoothed_variance(r.mesh, r.point_variance, r.vertex_rays);
-    uint64_t lo = 0, hi = 1024;
-    while (hi < (uint64_t(1) << 40) &&
-           planned_variance(plan_top_up(planning, r.vertex_rays, hi, w, max_rays), r.point_variance, r.vertex_rays, w) > want)
-      hi *= 2;
-    for (int it = 0; it < 30 && hi - lo > 1024; ++it) {
-      const uint64_t mid = lo + (hi - lo) / 2;
-      (planned_variance(plan_top_up(planning, r.vertex_rays, mid, w, max_rays), r.point_variance, r.vertex_rays, w) > want ? lo
-                                                                                                                                  : hi) = mid;
-    }
-    const TopUpPlan plan = plan_top_up(planning, r.vertex_rays, hi, w, max_rays);
+    const TopUpPlan plan = plan_top_up_to_variance(planning, r.vertex_rays, want, r.point_variance, w, max_rays);
     if (plan.rays == 0) break;
     if (progress.stage) progress.stage("error target", plan.vertices);  // each vertex's lattice continued
     const TopUpStats st = apply_top_up(r.mesh, scene, o.transfer, plan, r.point, r.point_variance, r.vertex_rays, progress.add);

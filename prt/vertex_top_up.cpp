@@ -41,59 +41,111 @@ namespace prtsub {
 
 namespace {
 constexpr int kMaxDoublings = 16;
-double extra_rays(double rays, int doublings) { return doublings < 0 ? 0.0 : rays * (std::exp2(doublings) - 1); }
+// 2^j − 1 for j = 0 .. kMaxDoublings, exactly (the plan's bisections evaluate it per vertex
+// hundreds of times; std::exp2 was most of --error's planning time).
+struct Doublings {
+  double factor[kMaxDoublings + 1];
+  Doublings() {
+    for (int j = 0; j <= kMaxDoublings; ++j) factor[j] = std::ldexp(1.0, j) - 1;
+  }
+};
+const Doublings kDoublings;
+double extra_rays(double rays, int doublings) {
+  if (doublings < 0) return 0.0;
+  return rays * (doublings <= kMaxDoublings ? kDoublings.factor[doublings] : std::ldexp(1.0, doublings) - 1);
+}
+}  // namespace
+
+namespace {
+
+// Water-filling: R_i + e_i = λ√(w_i c_i), rounded in log space to R_i·2^j (j ≥ 1; none below
+// R_i·√2, at most max_rays in all). One λ gives a whole plan; the callers bisect on λ.
+class WaterFilling {
+ public:
+  WaterFilling(const std::vector<double>& variance, const std::vector<double>& rays, const std::vector<double>& weight, double max_rays)
+      : rays_(rays), spread_(variance.size(), 0.0), offset_(variance.size(), 0.0), most_(variance.size(), 0) {
+    const size_t V = variance.size();
+    if (!weight.empty() && weight.size() != V) throw InputError("top-up: one weight per vertex expected");
+    if (rays.size() != V) throw InputError("top-up: one ray count per vertex expected");
+    for (size_t i = 0; i < V; ++i) {
+      const double w = weight.empty() ? 1.0 : weight[i];
+      if (rays[i] >= 2 && std::isfinite(variance[i]) && variance[i] > 0 && w > 0 && std::isfinite(w)) {
+        spread_[i] = std::sqrt(w * variance[i] * rays[i]);  // √(w_i c_i): the optimum total is λ times it
+        most_[i] = std::min(kMaxDoublings, static_cast<int>(std::floor(std::log2(max_rays / rays[i]) + 1e-9)));
+      }
+      total_ += spread_[i];
+    }
+    // log2(√(w_i c_i) / R_i) once per vertex: a bisection evaluates every vertex a hundred times.
+    for (size_t i = 0; i < V; ++i)
+      if (spread_[i] > 0) offset_[i] = std::log2(spread_[i] / rays[i]);
+  }
+  bool empty() const { return !(total_ > 0); }
+  size_t size() const { return spread_.size(); }
+  int level(double log_lambda, size_t i) const {
+    if (spread_[i] <= 0 || most_[i] < 1) return -1;
+    const double want = log_lambda + offset_[i];  // log2 of the wanted total over R_i
+    if (!(want >= 0.5)) return -1;
+    return std::min(most_[i], static_cast<int>(std::lround(want)));
+  }
+  double spent(double lambda) const {
+    const double log_lambda = std::log2(lambda);
+    double sum = 0;
+    for (size_t i = 0; i < size(); ++i) sum += extra_rays(rays_[i], level(log_lambda, i));
+    return sum;
+  }
+  TopUpPlan plan(double lambda) const {
+    TopUpPlan p;
+    p.level.assign(size(), -1);
+    const double log_lambda = std::log2(lambda);
+    for (size_t i = 0; i < size(); ++i) {
+      p.level[i] = level(log_lambda, i);
+      if (p.level[i] < 0) continue;
+      ++p.vertices;
+      p.rays += static_cast<uint64_t>(extra_rays(rays_[i], p.level[i]));
+    }
+    return p;
+  }
+
+ private:
+  const std::vector<double>& rays_;
+  std::vector<double> spread_, offset_;
+  std::vector<int> most_;
+  double total_ = 0;
+};
+
 }  // namespace
 
 TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<double>& rays, uint64_t budget,
                       const std::vector<double>& weight, double max_rays) {
-  const size_t V = variance.size();
-  if (!weight.empty() && weight.size() != V) throw InputError("top-up: one weight per vertex expected");
-  if (rays.size() != V) throw InputError("top-up: one ray count per vertex expected");
-  TopUpPlan plan;
-  plan.level.assign(V, -1);
-  std::vector<double> spread(V, 0.0);  // √(w_i c_i): the optimum total is λ times it
-  std::vector<int> most(V, 0);         // doublings that stay within max_rays
-  double total = 0;
-  for (size_t i = 0; i < V; ++i) {
-    const double w = weight.empty() ? 1.0 : weight[i];
-    if (rays[i] >= 2 && std::isfinite(variance[i]) && variance[i] > 0 && w > 0 && std::isfinite(w)) {
-      spread[i] = std::sqrt(w * variance[i] * rays[i]);
-      most[i] = std::min(kMaxDoublings, static_cast<int>(std::floor(std::log2(max_rays / rays[i]) + 1e-9)));
-    }
-    total += spread[i];
+  const WaterFilling fill(variance, rays, weight, max_rays);
+  if (fill.empty() || budget == 0) {
+    TopUpPlan none;
+    none.level.assign(variance.size(), -1);
+    return none;
   }
-  if (!(total > 0) || budget == 0) return plan;
-  // Water-filling: R_i + e_i = λ√(w_i c_i), rounded in log space to R_i·2^j (j ≥ 1; none below
-  // R_i·√2), with λ the largest for which the rounded plan fits the budget (bisection).
-  // log2(√(w_i c_i) / R_i) once per vertex: the bisection below evaluates every vertex 100 times.
-  std::vector<double> offset(V, 0.0);
-  for (size_t i = 0; i < V; ++i)
-    if (spread[i] > 0) offset[i] = std::log2(spread[i] / rays[i]);
-  auto doublings = [&](double log_lambda, size_t i) {
-    if (spread[i] <= 0 || most[i] < 1) return -1;
-    const double want = log_lambda + offset[i];  // log2 of the wanted total over R_i
-    if (!(want >= 0.5)) return -1;
-    return std::min(most[i], static_cast<int>(std::lround(want)));
-  };
-  auto spent = [&](double lambda) {
-    const double log_lambda = std::log2(lambda);
-    double sum = 0;
-    for (size_t i = 0; i < V; ++i) sum += extra_rays(rays[i], doublings(log_lambda, i));
-    return sum;
-  };
+  // λ the largest for which the rounded plan fits the budget.
   double lo = 0, hi = 1;
-  while (spent(hi) <= static_cast<double>(budget) && hi < 1e30) hi *= 2;
+  while (fill.spent(hi) <= static_cast<double>(budget) && hi < 1e30) hi *= 2;
   for (int it = 0; it < 100; ++it) {
     const double mid = 0.5 * (lo + hi);
-    (spent(mid) <= static_cast<double>(budget) ? lo : hi) = mid;
+    (fill.spent(mid) <= static_cast<double>(budget) ? lo : hi) = mid;
   }
-  for (size_t i = 0; i < V; ++i) {
-    plan.level[i] = doublings(std::log2(lo), i);
-    if (plan.level[i] < 0) continue;
-    ++plan.vertices;
-    plan.rays += static_cast<uint64_t>(extra_rays(rays[i], plan.level[i]));
+  return fill.plan(lo);
+}
+
+TopUpPlan plan_top_up_to_variance(const std::vector<double>& planning, const std::vector<double>& rays, double target,
+                                  const std::vector<double>& variance, const std::vector<double>& weight, double max_rays) {
+  const WaterFilling fill(planning, rays, weight, max_rays);
+  if (fill.empty() || !(planned_variance(fill.plan(0), variance, rays, weight) > target)) return fill.plan(0);
+  // λ the smallest whose plan meets the target (the planned variance falls as λ grows); if even
+  // every vertex at max_rays does not, that plan.
+  double lo = 0, hi = 1;
+  while (planned_variance(fill.plan(hi), variance, rays, weight) > target && hi < 1e30) hi *= 2;
+  for (int it = 0; it < 100; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (planned_variance(fill.plan(mid), variance, rays, weight) > target ? lo : hi) = mid;
   }
-  return plan;
+  return fill.plan(hi);
 }
 
 double planned_variance(const TopUpPlan& plan, const std::vector<double>& variance, const std::vector<double>& rays,

@@ -31,6 +31,12 @@ struct TopUpPlan {
 TopUpPlan plan_top_up(const std::vector<double>& variance, const std::vector<double>& rays, uint64_t budget,
                       const std::vector<double>& weight, double max_rays);
 
+//! The cheapest plan of the same water-filling (from `planning`, each vertex's variance to plan
+//! by) whose planned_variance(plan, variance, rays, weight) is at most `target`; the plan with
+//! every vertex at its most if none is.
+TopUpPlan plan_top_up_to_variance(const std::vector<double>& planning, const std::vector<double>& rays, double target,
+                                  const std::vector<double>& variance, const std::vector<double>& weight, double max_rays);
+
 //! Σ_i weight_i·variance_i as it will be after the plan (each variance falling as 1/rays).
 double planned_variance(const TopUpPlan& plan, const std::vector<double>& variance, const std::vector<double>& rays,
                         const std::vector<double>& weight);

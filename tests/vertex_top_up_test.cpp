@@ -6,6 +6,7 @@
 
 #include "helpers.h"
 #include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/random.h"
 
 namespace prtsub {
 namespace {
@@ -61,6 +62,33 @@ TEST(TopUp, WaterFillingGivesOpenVerticesNothingAndTheNoisiestTheMost) {
   EXPECT_EQ(plan(v, 1, budget).vertices, 0u);  // one ray: no variance to go by
   // At most 16× the first round each, however large the budget.
   for (int l : plan(v, R, 1000000000).level) EXPECT_LE(l, 4);
+}
+
+// --error's plan: the cheapest water-filling plan whose planned variance meets a target. Any
+// plan for a smaller budget is one of smaller λ, so it must miss the target.
+TEST(TopUp, AVarianceTargetGetsTheCheapestPlanThatMeetsIt) {
+  Rng rng(5, 0);
+  const size_t V = 200;
+  std::vector<double> planning(V), variance(V), rays(V), weight(V);
+  for (size_t i = 0; i < V; ++i) {
+    variance[i] = i % 7 == 0 ? 0.0 : std::pow(10.0, -3 + 3 * rng.uniform());
+    planning[i] = variance[i] * (0.5 + rng.uniform());  // planned by a smoothed estimate, judged by the vertex's own
+    rays[i] = i % 3 == 0 ? 64 : 128;
+    weight[i] = 0.1 + rng.uniform();
+  }
+  const double now = planned_variance(plan_top_up(planning, rays, 0, weight, 1e9), variance, rays, weight);
+  for (double share : {0.9, 0.5, 0.2, 0.05}) {
+    const TopUpPlan p = plan_top_up_to_variance(planning, rays, share * now, variance, weight, 64 * 128.0);
+    EXPECT_LE(planned_variance(p, variance, rays, weight), share * now) << share;
+    ASSERT_GT(p.rays, 0u);
+    const TopUpPlan cheaper = plan_top_up(planning, rays, p.rays - 1, weight, 64 * 128.0);
+    EXPECT_LT(cheaper.rays, p.rays);
+    EXPECT_GT(planned_variance(cheaper, variance, rays, weight), share * now) << share;
+  }
+  // A target already met needs nothing; one no plan can meet gets every vertex at its most.
+  EXPECT_EQ(plan_top_up_to_variance(planning, rays, 2 * now, variance, weight, 64 * 128.0).rays, 0u);
+  const TopUpPlan most = plan_top_up_to_variance(planning, rays, 0, variance, weight, 64 * 128.0);
+  for (size_t i = 0; i < V; ++i) EXPECT_EQ(most.level[i], variance[i] > 0 ? (rays[i] == 64 ? 7 : 6) : -1) << i;
 }
 
 TEST(TopUp, SmoothedVarianceAveragesOverTheFacesAroundAVertex) {
