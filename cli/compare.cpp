@@ -214,6 +214,29 @@ void write_tables(const std::string& dir, const std::string& input, const BakeOp
   write_file_atomically(dir + "/results.json", json.str());
 }
 
+// Every heat map of the page on one absolute scale: yellow at this fraction of the reference
+// frame's mean radiance, so two maps can be compared by eye.
+constexpr double kHeatScale = 0.25;
+
+// The heat maps' colour bar, from kHeatStops.
+std::string heat_colour_bar() {
+  std::ostringstream o;
+  o << "<div><svg xmlns='http://www.w3.org/2000/svg' width='480' height='46' font-family='sans-serif' font-size='12'><defs>"
+       "<linearGradient id='heat'>";
+  for (int k = 0; k < 5; ++k) {
+    char colour[8];
+    std::snprintf(colour, sizeof colour, "#%02x%02x%02x", int(std::lround(255 * kHeatStops[k][0])), int(std::lround(255 * kHeatStops[k][1])),
+                  int(std::lround(255 * kHeatStops[k][2])));
+    o << "<stop offset='" << 25 * k << "%' stop-color='" << colour << "'/>";
+  }
+  o << "</linearGradient></defs><rect x='10' y='4' width='400' height='16' fill='url(#heat)' stroke='#999'/>";
+  for (int k = 0; k <= 4; ++k)
+    o << "<text x='" << 10 + 100 * k << "' y='36' text-anchor='middle'>" << fmt(100 * kHeatScale * k / 4, 3) << (k == 4 ? "% or more" : "%")
+      << "</text>";
+  o << "</svg></div>";
+  return o.str();
+}
+
 // Frames at the frame count: the per-pixel reference, then each kept run with point and (if it
 // fitted) fitted values, each with its heat map. Returns caption -> PNG bytes.
 std::map<std::string, std::string> render_frames(const CompareCli& c, const BakeOptions& base, const Mesh& source,
@@ -238,7 +261,7 @@ std::map<std::string, std::string> render_frames(const CompareCli& c, const Bake
       const std::string label = name + (use_fit ? ", " + std::string(fit_method_name(base.fit.method)) : ", point");
       const Image frame = shade_gouraud(hits, r.mesh.triangles, vertex_radiance(use_fit ? r.transfer : r.point, light, 0.8));
       Image heat;
-      const ImageError err = image_error(frame, reference, &heat);
+      const ImageError err = image_error(frame, reference, &heat, kHeatScale);
       const std::string file = std::string(name == "uniform" ? "frame_uniform" : "frame_adaptive") + (use_fit ? "_fit" : "_point");
       cli_write_image(c.out_dir + "/" + file + ".png", frame);
       cli_write_image(c.out_dir + "/" + file + "_error.png", heat);
@@ -297,7 +320,9 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
   if (!images.empty()) {
     html << "<h2>Relit frames</h2><p>Frames at " << frame_count << " triangles under " << html_escape(c.lights[0])
          << (c.lights.size() > 1 ? " + " + html_escape(c.lights[1]) : "") << "; the reference computes transfer at every pixel ("
-         << c.frame_rays << " rays). Heat maps: black none, yellow 4x the frame's RMSE or more.</p>";
+         << c.frame_rays << " rays). Heat maps, all on one scale: the per-pixel error as a share of the reference "
+            "frame's mean radiance.</p>"
+         << heat_colour_bar();
     for (const auto& [caption, png] : images)
       html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << html_escape(caption) << "</figcaption></figure>";
   }

@@ -19,6 +19,16 @@ std::string num(double v, int digits = 4) {
   return b;
 }
 
+// Tick labels: whole numbers in full up to ten million (1500, not 1.5e+03).
+std::string tick(double v) {
+  if (v >= 1000 && v < 1e7) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.0f", v);
+    return b;
+  }
+  return num(v, 3);
+}
+
 // A marker of shape `k` centred at (x, y) with radius r.
 std::string marker(int k, double x, double y, double r, const std::string& colour) {
   std::ostringstream o;
@@ -79,14 +89,14 @@ std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string&
       const double x = m * std::pow(10, e);
       if (x < x0 || x > x1) continue;
       o << "<line x1='" << num(px(x)) << "' x2='" << num(px(x)) << "' y1='" << T << "' y2='" << H - B << "' stroke='#e4e4e4'/>";
-      o << "<text x='" << num(px(x)) << "' y='" << H - B + 16 << "' text-anchor='middle'>" << num(x, 3) << "</text>";
+      o << "<text x='" << num(px(x)) << "' y='" << H - B + 16 << "' text-anchor='middle'>" << tick(x) << "</text>";
     }
   for (int e = static_cast<int>(std::floor(std::log10(y0))); e <= std::ceil(std::log10(y1)); ++e)
     for (double m : mantissas(y0, y1)) {
       const double y = m * std::pow(10, e);
       if (y < y0 || y > y1) continue;
       o << "<line x1='" << L << "' x2='" << W - R << "' y1='" << num(py(y)) << "' y2='" << num(py(y)) << "' stroke='#e4e4e4'/>";
-      o << "<text x='" << L - 5 << "' y='" << num(py(y) + 4) << "' text-anchor='end'>" << num(y, 3) << "</text>";
+      o << "<text x='" << L - 5 << "' y='" << num(py(y) + 4) << "' text-anchor='end'>" << tick(y) << "</text>";
     }
   o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << html_escape(xlabel) << "</text>";
   o << "<text transform='rotate(-90)' x='" << -(T + H - B) / 2 << "' y='18' text-anchor='middle'>" << html_escape(ylabel) << "</text>";

@@ -171,7 +171,10 @@ Image render_reference(const RayScene& scene, const SurfaceHits& hits, const Row
   return img;
 }
 
-ImageError image_error(const Image& a, const Image& b, Image* heat) {
+// Black -> purple -> red -> orange -> yellow, given as display (sRGB) colours.
+const double kHeatStops[5][3] = {{0, 0, 0}, {0.35, 0.05, 0.55}, {0.85, 0.15, 0.3}, {0.98, 0.55, 0.05}, {1, 1, 0.6}};
+
+ImageError image_error(const Image& a, const Image& b, Image* heat, double heat_scale) {
   if (a.width != b.width || a.height != b.height)
     throw InputError("images differ in size: " + std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
                      std::to_string(b.width) + "x" + std::to_string(b.height));
@@ -200,9 +203,8 @@ ImageError image_error(const Image& a, const Image& b, Image* heat) {
   e.rmse_relative = mean_b > 0 ? rmse / mean_b : std::numeric_limits<double>::infinity();
   e.psnr_db = rmse > 0 ? 20 * std::log10(max_b / rmse) : std::numeric_limits<double>::infinity();
   if (heat) {
-    // Black -> purple -> red -> orange -> yellow, given as display (sRGB) colours.
-    static const double stops[5][3] = {{0, 0, 0}, {0.35, 0.05, 0.55}, {0.85, 0.15, 0.3}, {0.98, 0.55, 0.05}, {1, 1, 0.6}};
-    const double scale = std::max(4 * e.rmse_relative * mean_b, 1e-30);
+    const auto& stops = kHeatStops;
+    const double scale = std::max(heat_scale > 0 ? heat_scale * mean_b : 4 * e.rmse_relative * mean_b, 1e-30);
     heat->width = a.width, heat->height = a.height, heat->channels = 3;
     heat->pixels.assign(n * 3, 0.f);
     for (size_t i = 0; i < n; ++i) {

@@ -69,9 +69,15 @@ struct ImageError {
   double psnr_db = 0;        //!< 20 log10(max of b / RMSE); infinite for identical images
   size_t pixels = 0;
 };
-//! \param heat if not null, receives a false-colour map of per-pixel relative error (0 black,
-//!        4× the RMSE or more yellow; uncovered pixels grey)
+//! \param heat if not null, receives a false-colour map of per-pixel error (0 black, yellow at
+//!        the scale or more; uncovered pixels grey)
+//! \param heat_scale the scale as a fraction of b's mean over the covered pixels, the same for
+//!        every image compared with one b (so their maps share one absolute scale); 0: 4× this
+//!        pair's RMSE (each map scaled to its own error)
 //! \throw InputError if the sizes differ or nothing is covered in both
-ImageError image_error(const Image& a, const Image& b, Image* heat = nullptr);
+ImageError image_error(const Image& a, const Image& b, Image* heat = nullptr, double heat_scale = 0);
+
+//! The heat map's colours, black to yellow, at 0, ¼, ½, ¾ and 1 of its scale (display sRGB).
+extern const double kHeatStops[5][3];
 
 }  // namespace prtsub

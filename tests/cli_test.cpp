@@ -321,6 +321,8 @@ TEST_F(Cli, EvalAndCompareWriteTheirTablesAndReports) {
   const std::string html = read_file_bytes(dir.path("cmp/nested/report.html"));
   EXPECT_NE(html.find("<svg"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_NE(html.find("<linearGradient id='heat'>"), std::string::npos);  // the heat maps' one scale, as a bar
+  EXPECT_NE(html.find("25% or more"), std::string::npos);
   testing::internal::CaptureStderr();
   EXPECT_EQ(run({"compare", in, "--budgets", "300,x", "-o", dir.path("c2")}), 2);
   EXPECT_EQ(run({"bake", in, "-o", dir.path("z.ply"), "--refine", "adaptive"}), 2);

@@ -158,5 +158,28 @@ TEST(Render, ImageErrorHasClosedForms) {
   EXPECT_THROW(image_error(c, b), InputError);
 }
 
+// compare's heat maps share one absolute scale: the same error is the same colour in every
+// frame judged against one reference, whatever each frame's own RMSE.
+TEST(Render, HeatMapsOnOneScaleShowTheSameErrorInTheSameColour) {
+  Image b;
+  b.width = 3, b.height = 1, b.channels = 3;
+  b.pixels = {1, 1, 1, 1, 1, 1, 1, 1, 1};  // mean 1
+  Image one = b, two = b;
+  for (int c = 0; c < 3; ++c) one.pixels[size_t(c)] = 1.125f, two.pixels[size_t(c)] = 1.125f, two.pixels[size_t(3 + c)] = 1.5f;
+  Image h1, h2;
+  image_error(one, b, &h1, 0.5);
+  image_error(two, b, &h2, 0.5);
+  auto srgb = [](float linear) { return linear <= 0.0031308f ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055; };
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(h1.pixels[size_t(c)], h2.pixels[size_t(c)]);           // error 0.125 in both
+    EXPECT_NEAR(srgb(h1.pixels[size_t(c)]), kHeatStops[1][c], 1e-5);  // a quarter of the scale
+    EXPECT_NEAR(srgb(h2.pixels[size_t(3 + c)]), kHeatStops[4][c], 1e-5);  // 0.5: the scale, yellow
+    EXPECT_EQ(h1.pixels[size_t(6 + c)], 0.f);                          // no error: black
+  }
+  // Scaled each to its own error instead, the same pixel differs.
+  image_error(one, b, &h1), image_error(two, b, &h2);
+  EXPECT_NE(h1.pixels[0], h2.pixels[0]);
+}
+
 }  // namespace
 }  // namespace prtsub
