@@ -78,11 +78,7 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
-std::string fmt(double v, int digits = 4) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*g", digits, v);
-  return b;
-}
+std::string fmt(double v, int digits = 4) { return format_number(v, digits); }
 
 struct CompareCli {
   BakeCli bake;

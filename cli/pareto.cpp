@@ -22,12 +22,8 @@
 namespace prtsub {
 namespace {
 
-std::string fmt(double v, int digits = 4) {
-  if (!std::isfinite(v)) return "";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*g", digits, v);
-  return b;
-}
+// An empty cell for what is not a number (a grid run's front).
+std::string fmt(double v, int digits = 4) { return std::isfinite(v) ? format_number(v, digits) : std::string(); }
 
 std::string fixed(double v) {
   char b[32];

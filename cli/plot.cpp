@@ -11,13 +11,15 @@
 #include "cli/escape.h"
 
 namespace prtsub {
-namespace {
-
-std::string num(double v, int digits = 4) {
+std::string format_number(double v, int digits) {
   char b[32];
   std::snprintf(b, sizeof b, "%.*g", digits, v);
   return b;
 }
+
+namespace {
+
+std::string num(double v, int digits = 4) { return format_number(v, digits); }
 
 // Tick labels: whole numbers in full up to ten million (1500, not 1.5e+03).
 std::string tick(double v) {

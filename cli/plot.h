@@ -17,6 +17,9 @@ struct PlotSeries {
   bool muted = false;   //!< grey and small: a backdrop (a grid of runs) behind the named series
 };
 
+//! `v` with `digits` significant digits (printf's %g): the numbers of every page and table.
+std::string format_number(double v, int digits = 4);
+
 //! A log-log plot of `series` in a `width` × `height` SVG element; "<p>(no data)</p>" when no
 //! point is positive.
 std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string& xlabel, const std::string& ylabel, int width = 760,

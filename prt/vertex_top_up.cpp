@@ -54,9 +54,6 @@ double extra_rays(double rays, int doublings) {
   if (doublings < 0) return 0.0;
   return rays * (doublings <= kMaxDoublings ? kDoublings.factor[doublings] : std::ldexp(1.0, doublings) - 1);
 }
-}  // namespace
-
-namespace {
 
 // Water-filling: R_i + e_i = λ√(w_i c_i), rounded in log space to R_i·2^j (j ≥ 1; none below
 // R_i·√2, at most max_rays in all). One λ gives a whole plan; the callers bisect on λ.
