@@ -16,6 +16,7 @@
 #include "cli/summary.h"
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/evaluate.h"
+#include "prtsub/prt/gltf.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sh.h"
@@ -28,17 +29,26 @@ namespace {
 
 int cmd_bake(int argc, char** argv) {
   BakeCli cli;
-  std::string output;
-  ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset (binary PLY).\n"
-                         "With --refine, first refines the mesh: adaptively to a triangle budget where the transfer\n"
-                         "changes, or uniformly (OpenSubdiv) as a baseline.");
+  std::string output, up = "y";
+  GltfOptions gltf;
+  ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset: a binary PLY, or glTF 2.0\n"
+                         "when ASSET ends in .glb or .gltf. With --refine, first refines the mesh: adaptively to a\n"
+                         "triangle budget where the transfer changes, or uniformly (OpenSubdiv) as a baseline.");
   cli.add_common(args);
-  args.option("--output", "ASSET.ply", "output asset (required)", &output);
+  args.option("--output", "ASSET", "output asset, .ply, .glb or .gltf (required)", &output);
   args.alias("-o", "--output");
+  args.option("--up", "y|z", "glTF: the input's up axis; z rotates positions, normals and SH to glTF's +Y up (default y)", &up);
+  args.flag("--quantize", "glTF: transfer as normalized SHORT with a scale per coefficient (half the size)", &gltf.quantize);
+  args.flag("--compress", "glTF: EXT_meshopt_compression (required by the file; most engines and three.js decode it)", &gltf.compress);
   cli.add_refinement(args);
   cli.add_fit(args);
   if (!args.parse(argc, argv, 2)) return 0;
   if (output.empty()) throw UsageError("bake: missing -o ASSET.ply");
+  if (up != "y" && up != "z") throw UsageError("bake: --up takes y or z, not '" + up + "'");
+  gltf.up = parse_up_axis(up);
+  const bool to_gltf = is_gltf_path(output);
+  if (!to_gltf && (gltf.quantize || gltf.compress || gltf.up != UpAxis::Y))
+    throw UsageError("bake: --up, --quantize and --compress are for glTF outputs (-o ASSET.glb or .gltf)");
   const BakeOptions options = cli.options();
   check_writable(output);
   if (!cli.report.empty()) check_writable(cli.report);
@@ -50,7 +60,8 @@ int cmd_bake(int argc, char** argv) {
   const BakeResult res = bake(mesh, options, progress.callbacks());
   progress.finish();
   clock.lap();
-  write_asset(output, res.mesh, res.transfer, res.metadata, options.signal);
+  if (to_gltf) write_gltf_asset(output, res.mesh, res.transfer, res.metadata, options.signal, gltf);
+  else write_asset(output, res.mesh, res.transfer, res.metadata, options.signal);
   const double seconds_write = clock.lap();
 
   Report r;
@@ -110,7 +121,7 @@ Report inspect_record(const std::string& input, const Asset& a) {
 int cmd_inspect(int argc, char** argv) {
   std::string input, report;
   ArgParser args("inspect", "Prints what a PRT asset holds, checks it, and shows the transfer's energy per SH band.");
-  args.positional("ASSET", "a .ply asset written by prtsub bake", &input);
+  args.positional("ASSET", "an asset written by prtsub bake (.ply, .glb or .gltf)", &input);
   add_report_option(args, report);
   if (!args.parse(argc, argv, 2)) return 0;
   if (!report.empty()) check_writable(report);
@@ -188,7 +199,7 @@ int cmd_eval(int argc, char** argv) {
                  "Surface RMS transfer error of an asset, as a percentage of ||t_unshadowed||, at seeded area-\n"
                  "stratified points on its source surface against a reference with many more rays. Each point is\n"
                  "located in the asset through source_face, so any refinement can be judged on the same points.");
-  args.positional("ASSET", "a .ply asset written by prtsub bake (transfer or ao)", &input);
+  args.positional("ASSET", "an asset written by prtsub bake (.ply, .glb or .gltf; transfer or ao)", &input);
   args.option("--source", "INPUT", "the mesh the asset was baked from (required)", &source);
   args.option("--points", "N", "reference points", &ro.points, size_t(1), size_t(10000000));
   args.option("--rays", "R", "reference rays per point (0: 8x the asset's rays)", &rays, 0, 1 << 20);

@@ -60,7 +60,7 @@ int cmd_render(int argc, char** argv) {
   ArgParser args("render",
                  "Renders an asset under SH light: Gouraud-interpolated per-vertex PRT (what a GPU shows), or with\n"
                  "--reference the per-pixel ground truth (transfer computed at every pixel's hit point).");
-  args.positional("ASSET", "a .ply asset written by prtsub bake", &c.input);
+  args.positional("ASSET", "an asset written by prtsub bake (.ply, .glb or .gltf)", &c.input);
   args.option("--light", "SPEC", "env:PATH | sh:c0,c1,... | sun:X,Y,Z[,RADIUS_DEG] | sky[:UPX,UPY,UPZ] | random:SEED | const:R,G,B; lights add up", &c.lights);
   args.option("--light-rotate", "AXIS,DEG", "rotate the light about x, y, z or X,Y,Z", &c.rotations);
   args.option("--output", "FRAME.png|FRAME.exr", "output frame (required); EXR is linear float RGBA", &c.output);

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "prtsub/prt/gltf.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/ply.h"
@@ -69,21 +70,19 @@ Metadata ao_metadata() {
   };
 }
 
-void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
-                 const Metadata& metadata, AssetSignal signal) {
-  if (signal == AssetSignal::Ao && transfer_in.cols() != 1)
-    throw InputError(path + ": an AO asset takes one value per vertex, got " + std::to_string(transfer_in.cols()));
-  const RowMatrixXd transfer = signal == AssetSignal::Ao ? RowMatrixXd(transfer_in * kAoPerT0) : transfer_in;
+void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal) {
+  if (signal == AssetSignal::Ao && transfer.cols() != 1)
+    throw InputError(path + ": an AO asset takes one value per vertex, got " + std::to_string(transfer.cols()));
   if (!host_is_little_endian()) throw IoError(path + ": big-endian hosts are not supported");
-  const size_t V = mesh.num_vertices(), F = mesh.num_faces();
+  const size_t V = mesh.num_vertices();
   const Eigen::Index K = transfer.cols();
   if (static_cast<size_t>(transfer.rows()) != V)
     throw InputError(path + ": transfer has " + std::to_string(transfer.rows()) + " rows for " + std::to_string(V) + " vertices");
+  const double unit = signal == AssetSignal::Ao ? kAoPerT0 : 1.0;
   if (!transfer.allFinite()) throw InputError(path + ": refusing to write non-finite transfer values");
-  const bool uv = mesh.has_uv();
-  if (uv && static_cast<size_t>(mesh.uv.rows()) != V)
+  if (mesh.has_uv() && static_cast<size_t>(mesh.uv.rows()) != V)
     throw InputError(path + ": the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " + std::to_string(V) + " vertices");
-  if (uv && !mesh.uv.allFinite()) throw InputError(path + ": refusing to write non-finite UVs");
+  if (mesh.has_uv() && !mesh.uv.allFinite()) throw InputError(path + ": refusing to write non-finite UVs");
   for (size_t v = 0; v < V; ++v) {
     for (int c = 0; c < 3; ++c) {
       double p = mesh.positions(mesh.vertex_position[v], c);
@@ -91,9 +90,18 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
         throw InputError(path + ": position does not fit in float (vertex " + std::to_string(v) + ")");
     }
     for (Eigen::Index c = 0; c < K; ++c)
-      if (!std::isfinite(static_cast<float>(transfer(static_cast<Eigen::Index>(v), c))))
+      if (!std::isfinite(static_cast<float>(unit * transfer(static_cast<Eigen::Index>(v), c))))
         throw InputError(path + ": transfer value does not fit in float (vertex " + std::to_string(v) + ")");
   }
+}
+
+void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
+                 const Metadata& metadata, AssetSignal signal) {
+  check_asset_input(path, mesh, transfer_in, signal);
+  const RowMatrixXd transfer = signal == AssetSignal::Ao ? RowMatrixXd(transfer_in * kAoPerT0) : transfer_in;
+  const size_t V = mesh.num_vertices(), F = mesh.num_faces();
+  const Eigen::Index K = transfer.cols();
+  const bool uv = mesh.has_uv();
 
   std::string out;
   out.reserve(512 + V * (8 + static_cast<size_t>(K)) * 4 + F * 17);
@@ -131,6 +139,8 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
 Asset read_asset(const std::string& path) { return parse_asset(read_file_bytes(path), path); }
 
 Asset parse_asset(const std::string& bytes, const std::string& path) {
+  const size_t first = bytes.find_first_not_of(" \t\r\n");
+  if (bytes.compare(0, 4, "glTF") == 0 || (first != std::string::npos && bytes[first] == '{')) return parse_gltf_asset(bytes, path);
   PlyFile ply = parse_ply(bytes, path);
   const PlyElement* v = ply.element("vertex");
   const PlyElement* f = ply.element("face");

@@ -44,6 +44,10 @@ Metadata sh_convention_metadata(int order);
 //! The comment lines of an AO asset: what ao means.
 Metadata ao_metadata();
 
+//! The checks every asset writer makes before writing anything: the transfer's shape, finite
+//! values that fit in float, UVs for every vertex. \throw InputError naming `path`
+void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal);
+
 //! Writes mesh + transfer to `path` through a temporary file renamed into place, so a failed
 //! run leaves nothing behind.
 //! \param transfer #V by N², V = mesh.num_vertices(); for AO #V by 1 order-1 transfer, written
@@ -52,7 +56,8 @@ Metadata ao_metadata();
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
                  const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer);
 
-//! Reads an asset and checks it: sizes consistent, indices in range, no NaN/Inf.
+//! Reads an asset and checks it: sizes consistent, indices in range, no NaN/Inf. A glTF asset
+//! (docs/asset_format.md, "glTF"), told apart by its bytes, is read by parse_gltf_asset.
 //! \throw InputError naming the file and the first problem found
 Asset read_asset(const std::string& path);
 

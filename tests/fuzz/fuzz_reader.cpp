@@ -7,6 +7,7 @@
 #include <string>
 
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/gltf.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/mesh_io.h"
 
@@ -23,8 +24,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     prtsub::build_mesh(prtsub::parse_stl(bytes, "fuzz.stl"), "fuzz.stl");
 #elif PRTSUB_FUZZ_READER == 5
     prtsub::parse_asset(bytes, "fuzz_asset.ply");
+#elif PRTSUB_FUZZ_READER == 6
+    prtsub::parse_gltf_asset(bytes, "fuzz_asset.glb");
 #else
-#error "PRTSUB_FUZZ_READER: 1 obj, 2 ply, 3 off, 4 stl, 5 asset"
+#error "PRTSUB_FUZZ_READER: 1 obj, 2 ply, 3 off, 4 stl, 5 asset, 6 gltf"
 #endif
   } catch (const prtsub::InputError&) {
   } catch (const prtsub::IoError&) {
