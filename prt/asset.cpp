@@ -53,6 +53,20 @@ size_t clamp_ao(RowMatrixXd& t0) {
   return moved;
 }
 
+Mesh asset_mesh(const Asset& a) {
+  Mesh m;
+  m.positions = a.positions;
+  m.vertex_position.resize(static_cast<size_t>(a.positions.rows()));
+  for (size_t v = 0; v < m.vertex_position.size(); ++v) m.vertex_position[v] = static_cast<uint32_t>(v);
+  m.normals = a.normals;
+  m.uv = a.uv;
+  m.triangles = a.triangles;
+  m.source_face = a.source_face;
+  m.input_vertices = m.vertex_position.size();
+  for (uint32_t s : a.source_face) m.input_triangles = std::max<size_t>(m.input_triangles, size_t(s) + 1);
+  return m;
+}
+
 Metadata sh_convention_metadata(int order) {
   return {
       {"prtsub_asset", "1"},

@@ -35,6 +35,10 @@ struct Asset {
   AssetSignal signal = AssetSignal::Transfer;  //!< ao assets are read into transfer as t0 = ao / kAoPerT0
 };
 
+//! The asset's mesh, to write it again (in another format, say): one position per render
+//! vertex (nothing welded), its normals, UVs, triangles and source faces.
+Mesh asset_mesh(const Asset& asset);
+
 //! AO: clamps order-1 transfer into the AO range [0, 1]·(√π/2); returns how many values moved.
 size_t clamp_ao(RowMatrixXd& t0);
 

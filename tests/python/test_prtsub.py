@@ -1,0 +1,140 @@
+"""The Python module against the tool: the same bake through `import prtsub` and through the
+`prtsub` binary gives the same asset; arrays are views of the library's data; a white furnace
+renders to its closed form; errors are the tool's one-line messages as Python exceptions.
+Run by ctest with PYTHONPATH at the built module and PRTSUB_BINARY at the tool."""
+import math
+import os
+import subprocess
+import tempfile
+import unittest
+
+import numpy as np
+
+import prtsub
+
+BINARY = os.environ["PRTSUB_BINARY"]
+
+
+def box_on_ground():
+    """A unit cube standing on a 6x6 ground quad: shadows, so transfer varies (numpy arrays)."""
+    ground = [(-3, 0, -3), (3, 0, -3), (3, 0, 3), (-3, 0, 3)]
+    cube = [(x, y, z) for x in (-0.5, 0.5) for y in (0.01, 1.01) for z in (-0.5, 0.5)]
+    vertices = np.array(ground + cube, dtype=np.float64)
+    faces = [(0, 2, 1), (0, 3, 2)]  # ground, facing +y
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    for a, b, c, d in quads:
+        a, b, c, d = (4 + i for i in (a, b, c, d))
+        faces += [(a, b, c), (a, c, d)]
+    return vertices, np.array(faces, dtype=np.int64)
+
+
+def write_obj(path, vertices, faces):
+    with open(path, "w") as f:
+        for v in vertices:
+            f.write("v %.17g %.17g %.17g\n" % tuple(v))
+        for t in faces:
+            f.write("f %d %d %d\n" % tuple(i + 1 for i in t))
+
+
+class BakeTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.vertices, self.faces = box_on_ground()
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def path(self, name):
+        return os.path.join(self.dir.name, name)
+
+    def test_the_same_bake_as_the_tool(self):
+        write_obj(self.path("box.obj"), self.vertices, self.faces)
+        options = dict(order=3, rays=64, seed=7, fit="lsq")
+        ours = prtsub.bake(self.vertices, self.faces, **options)
+        subprocess.run([BINARY, "bake", self.path("box.obj"), "-o", self.path("tool.ply"), "--order", "3", "--rays", "64",
+                        "--seed", "7", "--fit", "lsq"], check=True, capture_output=True)
+        tool = prtsub.load(self.path("tool.ply"))
+        self.assertEqual(ours.transfer.shape, (tool.vertices.shape[0], 9))
+        np.testing.assert_array_equal(ours.faces, tool.faces)
+        np.testing.assert_allclose(ours.vertices, tool.vertices, atol=1e-6)
+        # The tool's asset holds float32: the same values to float rounding.
+        np.testing.assert_allclose(ours.transfer, tool.transfer, rtol=0, atol=1e-6 * np.abs(ours.transfer).max())
+        self.assertGreater(np.ptp(ours.transfer[:, 0]), 0.1, "the box shadows the ground")
+        self.assertEqual(ours.stats["triangles_out"], len(self.faces))
+        self.assertGreater(ours.stats["rays"], 64 * len(ours.vertices))
+
+    def test_arrays_are_views_of_the_asset(self):
+        a = prtsub.bake(self.vertices, self.faces, order=2, rays=16, fit="point")
+        t = a.transfer
+        self.assertFalse(t.flags["OWNDATA"])
+        self.assertTrue(np.shares_memory(t, a.transfer), "two reads are one buffer")
+        t[0, 0] = 42.0  # writing the view writes the asset
+        prtsub.save(a, self.path("a.ply"))
+        self.assertAlmostEqual(prtsub.load(self.path("a.ply")).transfer[0, 0], 42.0, places=5)
+        for name in ("vertices", "normals", "faces", "source_face"):
+            array = getattr(a, name)
+            self.assertFalse(array.flags["WRITEABLE"], name)
+            self.assertFalse(array.flags["OWNDATA"], name)
+        with self.assertRaises(ValueError):
+            a.faces[0, 0] = 1
+        del a  # the views keep the asset alive
+        self.assertEqual(t[0, 0], 42.0)
+
+    def test_a_white_furnace_renders_to_its_closed_form(self):
+        # An open quad facing +z, unoccluded: its transfer is exact (the control variate), and
+        # under constant radiance 1 a surface of albedo A leaves radiance A.
+        quad = np.array([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], dtype=np.float64)
+        a = prtsub.bake(quad, np.array([(0, 1, 2, 3)]), order=3, rays=8, fit="point")
+        camera = dict(eye=(0, 0, 4), target=(0, 0, 0), up=(0, 1, 0), fov=60)
+        frame = prtsub.render(a, prtsub.constant((1, 1, 1)), size=(40, 30), camera=camera, albedo=0.5)
+        self.assertEqual(frame.shape, (30, 40, 4))
+        self.assertEqual(frame.dtype, np.float32)
+        covered = frame[..., 3] > 0
+        self.assertGreater(covered.sum(), 100)
+        np.testing.assert_allclose(frame[covered][:, :3], 0.5, atol=1e-5)
+        self.assertTrue(np.all(frame[~covered][:, :3] == 0))
+        # A directional sun delivering irradiance pi (L = pi delta_d, so l_i = pi y_i(d)) on the
+        # exact transfer A_l y_i(n): radiance A * sum_l A_l (2l+1)/(4 pi) P_l(cos theta), which
+        # order 3 (bands 0-2) truncates to A (1/4 + c/2 + 5/16 P_2(c)); 1.0625 A overhead.
+        for degrees in (0, 60, 85):
+            c = math.cos(math.radians(degrees))
+            want = 0.5 * (0.25 + 0.5 * c + 5 / 16 * (3 * c * c - 1) / 2)
+            d = (0, math.sin(math.radians(degrees)), c)
+            sun = prtsub.render(a, prtsub.sun(d), size=(40, 30), camera=camera, albedo=0.5)
+            np.testing.assert_allclose(sun[covered][:, :3], want, atol=1e-5)
+
+    def test_ao_assets_and_gltf(self):
+        a = prtsub.bake(self.vertices, self.faces, signal="ao", rays=32, fit="point")
+        self.assertIsNone(a.transfer)
+        self.assertEqual(a.ao.shape, (len(a.vertices),))
+        self.assertTrue(np.all((a.ao >= 0) & (a.ao <= 1)))
+        prtsub.save(a, self.path("ao.glb"), compress=True)
+        b = prtsub.load(self.path("ao.glb"))
+        self.assertEqual(b.signal, "ao")
+        np.testing.assert_allclose(b.ao, a.ao, atol=1e-6)
+
+    def test_errors_are_the_tools_one_line_messages(self):
+        with open(self.path("bad.obj"), "w") as f:
+            f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+        tool = subprocess.run([BINARY, "bake", self.path("bad.obj"), "-o", self.path("x.ply")], capture_output=True, text=True)
+        self.assertEqual(tool.returncode, 1)
+        with self.assertRaises(prtsub.InputError) as raised:
+            prtsub.load_mesh(self.path("bad.obj"))
+        self.assertEqual("prtsub: error: " + str(raised.exception) + "\n", tool.stderr)
+        self.assertIsInstance(raised.exception, ValueError)
+        self.assertIsInstance(raised.exception, prtsub.Error)
+        with self.assertRaises(prtsub.IoError) as missing:
+            prtsub.load(self.path("missing.ply"))
+        self.assertTrue(str(missing.exception).startswith(self.path("missing.ply") + ": "))
+        self.assertIsInstance(missing.exception, OSError)
+        with self.assertRaises(TypeError):
+            prtsub.bake(self.vertices, self.faces, raes=3)
+        with self.assertRaises(prtsub.InputError):
+            prtsub.bake(self.vertices, self.faces, order=11)
+        with self.assertRaises(prtsub.InputError):
+            prtsub.bake(self.vertices[:, :2], self.faces)
+        self.assertFalse(os.path.exists(self.path("x.ply")))
+
+
+if __name__ == "__main__":
+    unittest.main()
