@@ -258,6 +258,7 @@ const char* kUsage =
     "            eval --fits INPUT: point, average and least-squares values on one mesh\n"
     "  render    relight an asset into a frame (Gouraud, or the per-pixel reference)\n"
     "  diff      compare two frames: relative RMSE, PSNR and an error heat map\n"
+    "  view      write a self-contained HTML page that relights an asset in the browser\n"
     "\n"
     "prtsub COMMAND --help shows a command's options. Docs: docs/ in the source tree.\n";
 
@@ -289,6 +290,7 @@ int run_cli(int argc, char** argv) {
     }
     if (command == "compare") return cmd_compare(argc, argv);
     if (command == "diff") return cmd_diff(argc, argv);
+    if (command == "view") return cmd_view(argc, argv);
     throw UsageError("unknown command '" + command + "' (try prtsub --help)");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "prtsub: error: %s\n", e.what());

@@ -13,5 +13,6 @@ int cmd_bench(int argc, char** argv);      //!< bench.cpp
 int cmd_render(int argc, char** argv);     //!< render.cpp
 int cmd_compare(int argc, char** argv);    //!< compare.cpp
 int cmd_eval_fits(int argc, char** argv);  //!< fit_table.cpp
+int cmd_view(int argc, char** argv);       //!< view.cpp
 
 }  // namespace prtsub

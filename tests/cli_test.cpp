@@ -361,6 +361,10 @@ TEST_F(Cli, EveryUsageMistakeExitsTwoWithOneLineNamingTheOption) {
       {"--estimates", {"compare", in, "--budgets", "300", "--estimates", "root,best", "-o", dir.path("c")}},
       {"--frame-size", {"compare", in, "--budgets", "300", "--frame-size", "1", "-o", dir.path("c")}},
       {"--light", {"compare", in, "--budgets", "300", "--light", "moon:1", "-o", dir.path("c")}},
+      {"--up", {"bake", in, "-o", dir.path("x.glb"), "--up", "x"}},
+      {"--quantize", {"bake", in, "-o", out, "--quantize"}},
+      {"--compress", {"bake", in, "-o", out, "--compress"}},
+      {"-o", {"view", asset}},
   };
   const size_t before = files();
   for (const auto& [option, args] : cases) {
@@ -384,7 +388,7 @@ TEST_F(Cli, EmptyAssetsAreOneLineErrorsForEveryCommand) {
   const std::string in = scene();
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"render", empty, "--light", "sky", "-o", dir.path("f.exr")}, {"inspect", empty},
-        {"eval", empty, "--source", in}}) {
+        {"eval", empty, "--source", in}, {"view", empty, "-o", dir.path("v.html")}}) {
     testing::internal::CaptureStdout();
     testing::internal::CaptureStderr();
     EXPECT_EQ(run(args), 1) << args[0];
@@ -393,6 +397,7 @@ TEST_F(Cli, EmptyAssetsAreOneLineErrorsForEveryCommand) {
     EXPECT_EQ(err, "prtsub: error: " + empty + ": empty asset (0 vertices, 0 faces)\n") << args[0];
   }
   EXPECT_FALSE(test::file_exists(dir.path("f.exr")));
+  EXPECT_FALSE(test::file_exists(dir.path("v.html")));
 }
 
 // A failed check says why on stderr, not only on stdout.
@@ -424,6 +429,32 @@ TEST_F(Cli, CompareEscapesTheInputsNameInItsPageAndTables) {
   EXPECT_NE(html.find("a&lt;img src=x onerror=alert(1)&gt;&quot;q&#39;.obj"), std::string::npos);
   EXPECT_EQ(json.find("<img"), std::string::npos);
   EXPECT_NE(json.find("a\\u003cimg src=x onerror=alert(1)\\u003e\\\"q'.obj"), std::string::npos) << json.substr(0, 200);
+}
+
+// view embeds the asset and the viewer in one page; a hostile file name reaches it only escaped,
+// and the asset inside is the one on disk (decoded from the page's base64 GLB).
+TEST_F(Cli, ViewWritesOnePageThatHoldsTheAssetAndEscapesItsName) {
+  const std::string in = scene(), asset = dir.path("a</script><img src=x onerror=alert(1)>.ply"), page = dir.path("v.html");
+  std::filesystem::create_directory(dir.path("a<"));  // the path's "</" is a directory separator
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "8", "--order", "3", "--fit", "point"}), 0);
+  ASSERT_EQ(run({"view", asset, "-o", page, "--source", in, "--rays", "16", "--report", dir.path("v.json")}), 0);
+  testing::internal::GetCapturedStdout();
+  const std::string html = read_file_bytes(page);
+  EXPECT_EQ(html.find("<img src=x"), std::string::npos);
+  EXPECT_NE(html.find("a&lt;/script&gt;&lt;img src=x onerror=alert(1)&gt;.ply"), std::string::npos);  // the title
+  EXPECT_NE(html.find("\\u003c/script\\u003e"), std::string::npos);                                  // the data's name
+  size_t scripts = 0;
+  for (size_t at = html.find("</script>"); at != std::string::npos; at = html.find("</script>", at + 1)) ++scripts;
+  EXPECT_EQ(scripts, 2u) << "the data and the bundle, each closed once";
+  const size_t glb = html.find("\"glb\":\"") + 7;
+  const std::string bytes = test::base64_decode(html.substr(glb, html.find('"', glb) - glb));
+  const Asset inside = parse_asset(bytes, "page"), original = read_asset(asset);
+  EXPECT_EQ(inside.transfer, original.transfer);
+  EXPECT_EQ(inside.triangles, original.triangles);
+  const std::string report = read_file_bytes(dir.path("v.json"));
+  EXPECT_NE(report.find("\"reference_rays\": 16"), std::string::npos) << report;
+  EXPECT_NE(html.find("\"error\":{\"positions\""), std::string::npos);
 }
 
 }  // namespace

@@ -1,0 +1,110 @@
+#include "cli/viewer_page.h"
+
+#include <cstdio>
+#include <cstring>
+
+#include "cli/escape.h"
+#include "prtsub/prt/base64.h"
+#include "prtsub/prt/gltf.h"
+#include "prtsub/prt/lights.h"
+#include "prtsub/subdiv/exceptions.h"
+
+namespace prtsub {
+
+extern const char kViewerScript[];    // viewer/dist/viewer.js (cmake/embed_text.cmake)
+extern const char kViewerTemplate[];  // viewer/src/page.html
+
+namespace {
+
+// Little-endian float32 (or uint32) bytes of a row-major array, base64-encoded for the page.
+template <class T, class Source>
+std::string packed(const Source* data, size_t n) {
+  std::string bytes(n * sizeof(T), '\0');
+  for (size_t i = 0; i < n; ++i) {
+    const T v = static_cast<T>(data[i]);
+    std::memcpy(&bytes[i * sizeof v], &v, sizeof v);
+  }
+  return "\"" + base64_encode(bytes) + "\"";
+}
+
+}  // namespace
+
+ErrorViewPoints error_view_points(const Asset& a, size_t target) {
+  const size_t F = a.triangles.size();
+  ErrorViewPoints p;
+  while (p.segments < 8 && F * static_cast<size_t>((p.segments + 1) * (p.segments + 1)) <= target) ++p.segments;
+  const int n = p.segments, per = (n + 1) * (n + 2) / 2;
+  const Eigen::Index K = a.transfer.cols();
+  p.positions.resize(static_cast<Eigen::Index>(F) * per, 3);
+  p.normals.resize(p.positions.rows(), 3);
+  p.asset.resize(p.positions.rows(), K);
+  p.triangles.reserve(F * static_cast<size_t>(n * n));
+  for (size_t f = 0; f < F; ++f) {
+    const Triangle& t = a.triangles[f];
+    const auto base = static_cast<uint32_t>(f * static_cast<size_t>(per));
+    auto index = [&](int i, int j) { return base + static_cast<uint32_t>(i * (n + 1) - i * (i - 1) / 2 + j); };  // row i, j ≤ n − i
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n - i; ++j) {
+        const double w1 = double(i) / n, w2 = double(j) / n, w0 = 1 - w1 - w2;
+        const auto r = static_cast<Eigen::Index>(index(i, j));
+        p.positions.row(r) = w0 * a.positions.row(t[0]) + w1 * a.positions.row(t[1]) + w2 * a.positions.row(t[2]);
+        const Eigen::RowVector3d nrm = w0 * a.normals.row(t[0]) + w1 * a.normals.row(t[1]) + w2 * a.normals.row(t[2]);
+        p.normals.row(r) = nrm.norm() > 0 ? Eigen::RowVector3d(nrm.normalized()) : Eigen::RowVector3d(a.normals.row(t[0]));
+        p.asset.row(r) = w0 * a.transfer.row(t[0]) + w1 * a.transfer.row(t[1]) + w2 * a.transfer.row(t[2]);
+        if (i + j < n) p.triangles.push_back({index(i, j), index(i + 1, j), index(i, j + 1)});
+        if (i + j < n - 1) p.triangles.push_back({index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)});
+      }
+  }
+  return p;
+}
+
+std::string viewer_data_json(const Asset& asset, const ViewerPageOptions& o) {
+  const Eigen::Index K = asset.transfer.cols();
+  if (o.reference && (!o.error_points || o.reference->rows() != o.error_points->positions.rows() || o.reference->cols() != K))
+    throw InputError("viewer: the reference does not hold one row of " + std::to_string(K) + " values per error-view point");
+  const std::string glb = gltf_asset_bytes("viewer.glb", asset_mesh(asset), asset.transfer, asset.metadata, asset.signal, {});
+  std::string out = "{\"glb\":\"" + base64_encode(glb) + "\",\"name\":" + json_quote(o.name) + ",\"random_lights\":{";
+  char number[32];
+  for (size_t s = 0; s < o.random_seeds.size(); ++s) {
+    const ShLight l = random_light(asset.order, o.random_seeds[s]);
+    out += (s ? ",\"" : "\"") + std::to_string(o.random_seeds[s]) + "\":[";
+    for (Eigen::Index i = 0; i < l.coeffs.size(); ++i) {
+      std::snprintf(number, sizeof number, "%.17g", l.coeffs.data()[i]);
+      out += (i ? "," : "") + std::string(number);
+    }
+    out += "]";
+  }
+  out += "},\"error\":";
+  if (o.reference) {
+    if (!o.reference->allFinite()) throw InputError("viewer: the reference holds NaN or Inf");
+    const ErrorViewPoints& p = *o.error_points;
+    const auto P = static_cast<size_t>(p.positions.rows());
+    out += "{\"positions\":" + packed<float>(p.positions.data(), 3 * P) + ",\"indices\":" +
+           packed<uint32_t>(p.triangles.empty() ? nullptr : p.triangles[0].data(), 3 * p.triangles.size()) +
+           ",\"asset\":" + packed<float>(p.asset.data(), P * static_cast<size_t>(K)) +
+           ",\"reference\":" + packed<float>(o.reference->data(), P * static_cast<size_t>(K)) + "}";
+  } else {
+    out += "null";
+  }
+  out += ",\"reference_rays\":" + std::to_string(o.reference_rays) + "}";
+  return out;
+}
+
+std::string viewer_page(const Asset& asset, const ViewerPageOptions& o) {
+  const std::string page = kViewerTemplate, script = kViewerScript;
+  // The bundle is inlined in a <script> element; the build checks it cannot close it early.
+  if (script.find("</script") != std::string::npos) throw Error("viewer: the bundled script contains </script");
+  std::string out;
+  size_t at = 0;
+  for (const auto& [marker, text] : {std::pair<const char*, std::string>{"@TITLE@", html_escape(o.name)},
+                                     {"@DATA@", viewer_data_json(asset, o)},
+                                     {"@SCRIPT@", script}}) {
+    const size_t next = page.find(marker, at);
+    if (next == std::string::npos) throw Error(std::string("viewer: the page template lacks ") + marker);
+    out += page.substr(at, next - at) + text;
+    at = next + std::strlen(marker);
+  }
+  return out + page.substr(at);
+}
+
+}  // namespace prtsub

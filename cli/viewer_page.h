@@ -1,0 +1,45 @@
+// The relighting viewer's page (viewer/, docs/viewer.md): one self-contained HTML file, the
+// asset embedded as a GLB, the bundle of viewer/dist/viewer.js inlined. `prtsub view` writes it
+// and `prtsub compare` embeds one in its report.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "prtsub/prt/asset.h"
+
+namespace prtsub {
+
+//! Where the error view looks: points on a regular grid of barycentrics inside every asset
+//! triangle (n segments an edge), as a triangle soup, with the asset's transfer interpolated
+//! there exactly as a GPU interpolates it; the caller traces the reference at them.
+struct ErrorViewPoints {
+  int segments = 1;
+  RowMatrixX3d positions, normals;  //!< #P by 3 (normals interpolated and normalised)
+  RowMatrixXd asset;                //!< #P by K: the asset's interpolated values
+  std::vector<Triangle> triangles;  //!< over the points
+};
+
+//! n = the largest of 1..8 with F·n² ≤ target_triangles (at least 1).
+ErrorViewPoints error_view_points(const Asset& asset, size_t target_triangles = 50000);
+
+struct ViewerPageOptions {
+  std::string name;  //!< shown in the page's title and panel (escaped)
+  //! The error view's points and the reference transfer traced at them (#P by K); null leaves
+  //! that view off
+  const ErrorViewPoints* error_points = nullptr;
+  const RowMatrixXd* reference = nullptr;
+  int reference_rays = 0;
+  //! random lights the page offers (the library's generator, so they match `--light random:S`)
+  std::vector<uint64_t> random_seeds = {1, 2, 3, 4, 5, 6, 7, 8};
+};
+
+//! The page for `asset`. Text from files reaches it only escaped: the name through html_escape
+//! and json_quote, the asset and the reference as base64. \throw InputError as write_asset
+std::string viewer_page(const Asset& asset, const ViewerPageOptions& options);
+
+//! The page's data alone: the JSON object the viewer reads from its prtsub-data element (for
+//! compare's report, which embeds the viewer in an iframe of its own).
+std::string viewer_data_json(const Asset& asset, const ViewerPageOptions& options);
+
+}  // namespace prtsub
