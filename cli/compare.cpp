@@ -6,6 +6,7 @@
 #include "cli/commands.h"
 #include "cli/images.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -20,10 +21,13 @@
 #include "cli/report.h"
 #include "cli/pareto.h"
 #include "cli/plot.h"
+#include "cli/viewer_page.h"
+#include "prtsub/prt/base64.h"
 #include "prtsub/prt/evaluate.h"
 #include "prtsub/prt/lights.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/transfer.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/ply.h"
 #include "prtsub/subdiv/stopwatch.h"
@@ -59,24 +63,6 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-std::string base64(const std::string& bytes) {
-  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    uint32_t v = (uint8_t(bytes[i]) << 16) | (uint8_t(bytes[i + 1]) << 8) | uint8_t(bytes[i + 2]);
-    for (int k = 3; k >= 0; --k) out += table[(v >> (6 * k)) & 63];
-  }
-  if (i < bytes.size()) {
-    uint32_t v = uint8_t(bytes[i]) << 16;
-    if (i + 1 < bytes.size()) v |= uint8_t(bytes[i + 1]) << 8;
-    out += table[(v >> 18) & 63];
-    out += table[(v >> 12) & 63];
-    out += i + 1 < bytes.size() ? table[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
-}
 
 std::string fmt(double v, int digits = 4) { return format_number(v, digits); }
 
@@ -233,11 +219,15 @@ std::string heat_colour_bar() {
   return o.str();
 }
 
-// Frames at the frame count: the per-pixel reference, then each kept run with point and (if it
-// fitted) fitted values, each with its heat map. Returns caption -> PNG bytes.
-std::map<std::string, std::string> render_frames(const CompareCli& c, const BakeOptions& base, const Mesh& source,
-                                                 const RayScene& source_scene, const std::map<std::string, BakeResult>& keep) {
-  std::map<std::string, std::string> images;
+// Frames at the frame count, in the page's order: the per-pixel reference, then uniform and
+// adaptive, each with point and (if it fitted) fitted values, each frame with its heat map.
+struct Frame {
+  std::string label, caption, png, heat_png;
+};
+
+std::vector<Frame> render_frames(const CompareCli& c, const BakeOptions& base, const Mesh& source, const RayScene& source_scene,
+                                 const std::map<std::string, BakeResult>& keep) {
+  std::vector<Frame> frames;
   int fw = 0, fh = 0;
   parse_size(c.frame_size, "--frame-size", fw, fh);
   const ShLight light = parse_lights(c.lights, base.transfer.order);
@@ -247,8 +237,15 @@ std::map<std::string, std::string> render_frames(const CompareCli& c, const Bake
   fo.rays = c.frame_rays;
   const Image reference = render_reference(source_scene, ref_hits, vertex_positions(source), source.normals, source.triangles, light, 0.8, fo);
   cli_write_image(c.out_dir + "/frame_reference.png", reference);
-  images["per-pixel reference"] = read_file_bytes(c.out_dir + "/frame_reference.png");
-  for (const auto& [name, r] : keep) {
+  frames.push_back({"per-pixel reference", std::to_string(source.num_faces()) + " source triangles, " + std::to_string(c.frame_rays) +
+                    " rays a pixel", read_file_bytes(c.out_dir + "/frame_reference.png"), ""});
+  // "uniform" sorts after "adaptive ..."; the page shows uniform first.
+  std::vector<const std::pair<const std::string, BakeResult>*> runs;
+  for (const auto& run : keep) runs.push_back(&run);
+  std::stable_sort(runs.begin(), runs.end(), [](auto* a, auto* b) { return (a->first == "uniform") > (b->first == "uniform"); });
+  for (const auto* run : runs) {
+    const std::string& name = run->first;
+    const BakeResult& r = run->second;
     const RayScene scene(vertex_positions(r.mesh), r.mesh.triangles);
     const SurfaceHits hits = trace_primary(scene, cam, fw, fh, base.transfer.threads);
     const bool fitted_run = (r.point - r.transfer).cwiseAbs().maxCoeff() > 0;
@@ -261,12 +258,31 @@ std::map<std::string, std::string> render_frames(const CompareCli& c, const Bake
       const std::string file = std::string(name == "uniform" ? "frame_uniform" : "frame_adaptive") + (use_fit ? "_fit" : "_point");
       cli_write_image(c.out_dir + "/" + file + ".png", frame);
       cli_write_image(c.out_dir + "/" + file + "_error.png", heat);
-      images[label + " (" + std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%)"] =
-          read_file_bytes(c.out_dir + "/" + file + ".png");
-      images["error of " + label] = read_file_bytes(c.out_dir + "/" + file + "_error.png");
+      frames.push_back({label, std::to_string(r.mesh.num_faces()) + " triangles; image RMSE " + fmt(100 * err.rmse_relative, 3) + "%",
+                        read_file_bytes(c.out_dir + "/" + file + ".png"), read_file_bytes(c.out_dir + "/" + file + "_error.png")});
     }
   }
-  return images;
+  return frames;
+}
+
+// The adaptive asset of the frames in the viewer, with its error view against the source
+// (reference rays: the reference frame's), as DIR/viewer.html and for the page's iframe.
+std::string write_viewer(const CompareCli& c, const BakeOptions& base, const RayScene& source_scene,
+                         const std::map<std::string, BakeResult>& keep) {
+  const auto it = std::find_if(keep.begin(), keep.end(), [](const auto& run) { return run.first != "uniform"; });
+  if (it == keep.end()) return "";
+  const BakeResult& r = it->second;
+  const Asset asset = make_asset(r.mesh, r.transfer, r.metadata, base.signal);
+  const ErrorViewPoints points = error_view_points(asset);
+  TransferOptions t = base.transfer;
+  t.order = asset.order, t.rays = c.frame_rays;
+  const RowMatrixXd reference = shadowed_transfer(source_scene, points.positions, points.normals, t);
+  ViewerPageOptions o;
+  o.name = c.bake.input + " (" + it->first + ", " + std::to_string(r.mesh.num_faces()) + " triangles)";
+  o.error_points = &points, o.reference = &reference, o.reference_rays = t.rays;
+  const std::string page = viewer_page(asset, o);
+  write_file_atomically(c.out_dir + "/viewer.html", page);
+  return page;
 }
 
 // Plot series by name, in a fixed order: each gets its own colour and marker.
@@ -283,13 +299,15 @@ std::vector<PlotSeries> series_of(const std::vector<Row>& rows, bool by_time) {
 }
 
 void write_page(const CompareCli& c, const BakeOptions& base, size_t source_faces, const Reference& ref, const std::vector<Row>& rows,
-                const std::map<std::string, std::string>& images, size_t frame_count, const std::string& pareto_html) {
+                const std::vector<Frame>& frames, size_t frame_count, const std::string& pareto_html, const std::string& viewer) {
   const std::string& input = c.bake.input;
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset='utf-8'><title>prtsub compare: " << html_escape(input) << "</title>"
        << "<style>body{font-family:sans-serif;margin:24px;color:#222}table{border-collapse:collapse}td,th{padding:3px 10px;"
           "border-bottom:1px solid #ddd;text-align:right}th{background:#f4f4f4}td:first-child,td:nth-child(2){text-align:left}"
-          "figure{display:inline-block;margin:6px}figcaption{font-size:12px;max-width:480px}</style></head><body>";
+          "figure{display:inline-block;margin:6px}figcaption{font-size:12px;max-width:480px}"
+          ".frames td{vertical-align:top;text-align:center;border:0;padding:4px}.frames img{display:block;max-width:100%;background:#222}"
+          ".frames th{background:none;font-weight:600;text-align:center}iframe{border:1px solid #ccc;width:960px;height:600px;max-width:100%}</style></head><body>";
   html << "<h1>" << (rows.empty() ? "Rays and samples" : "Uniform against adaptive refinement") << "</h1><p>Input <code>"
        << html_escape(input) << "</code>, " << source_faces << " triangles. Order " << base.transfer.order << ", "
        << base.transfer.rays << " rays per vertex, seed " << base.transfer.seed
@@ -313,15 +331,28 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
     html << "</table>";
   }
   html << pareto_html;
-  if (!images.empty()) {
+  if (!frames.empty()) {
     html << "<h2>Relit frames</h2><p>Frames at " << frame_count << " triangles under " << html_escape(c.lights[0])
-         << (c.lights.size() > 1 ? " + " + html_escape(c.lights[1]) : "") << "; the reference computes transfer at every pixel ("
-         << c.frame_rays << " rays). Heat maps, all on one scale: the per-pixel error as a share of the reference "
-            "frame's mean radiance.</p>"
-         << heat_colour_bar();
-    for (const auto& [caption, png] : images)
-      html << "<figure><img src='data:image/png;base64," << base64(png) << "'><figcaption>" << html_escape(caption) << "</figcaption></figure>";
+         << (c.lights.size() > 1 ? " + " + html_escape(c.lights[1]) : "") << ", side by side with the per-pixel reference, which "
+         << "computes transfer at every pixel (" << c.frame_rays << " rays). Below each frame its heat map, all on one scale: "
+            "the per-pixel error as a share of the reference frame's mean radiance.</p>"
+         << heat_colour_bar() << "<table class='frames'><tr>";
+    for (const Frame& f : frames) html << "<th>" << html_escape(f.label) << "</th>";
+    html << "</tr><tr>";
+    for (const Frame& f : frames)
+      html << "<td><img alt='" << html_escape(f.label) << "' src='data:image/png;base64," << base64_encode(f.png) << "'></td>";
+    html << "</tr><tr>";
+    for (const Frame& f : frames)
+      html << "<td>" << (f.heat_png.empty() ? std::string() : "<img alt='error of " + html_escape(f.label) + "' src='data:image/png;base64," + base64_encode(f.heat_png) + "'>") << "</td>";
+    html << "</tr><tr>";
+    for (const Frame& f : frames) html << "<td style='font-size:12px'>" << html_escape(f.caption) << "</td>";
+    html << "</tr></table>";
   }
+  if (!viewer.empty())
+    html << "<h2>The adaptive asset in the viewer</h2><p>Drag to turn the camera, shift-drag to turn the light; the panel "
+            "changes the light and shows the error view (the asset against reference transfer on the source, under the light "
+            "of the moment). The same page is <code>viewer.html</code> beside this report.</p><iframe title='viewer' srcdoc=\""
+         << html_escape(viewer) << "\"></iframe>";
   const std::string tables = rows.empty() ? "pareto.csv and pareto.json"
                             : pareto_html.empty() ? "results.csv and results.json"
                                                   : "results.csv and results.json (refinement), pareto.csv and pareto.json (speed against error)";
@@ -402,9 +433,9 @@ int cmd_compare(int argc, char** argv) {
   std::vector<ParetoRun> pareto_runs;
   const std::string pareto_html = c.pareto ? run_pareto(source, base, pareto, ref, c.out_dir, pareto_runs) : std::string();
   if (!plan.empty()) write_tables(c.out_dir, c.bake.input, base, ref, rows);
-  const std::map<std::string, std::string> images =
-      keep.empty() ? std::map<std::string, std::string>() : render_frames(c, base, source, source_scene, keep);
-  write_page(c, base, source.num_faces(), ref, rows, images, frame_count, pareto_html);
+  const std::vector<Frame> frames = keep.empty() ? std::vector<Frame>() : render_frames(c, base, source, source_scene, keep);
+  const std::string viewer = write_viewer(c, base, source_scene, keep);
+  write_page(c, base, source.num_faces(), ref, rows, frames, frame_count, pareto_html, viewer);
   std::printf("  wrote %s/%sreport.html (%.1f s)\n", c.out_dir.c_str(),
               (std::string(plan.empty() ? "" : "results.csv, results.json, ") + (c.pareto ? "pareto.csv, pareto.json, " : "")).c_str(),
               clock.total());

@@ -32,13 +32,10 @@ std::string packed(const Source* data, size_t n) {
 ErrorViewPoints error_view_points(const Asset& a, size_t target) {
   const size_t F = a.triangles.size();
   ErrorViewPoints p;
-  while (p.segments < 8 && F * static_cast<size_t>((p.segments + 1) * (p.segments + 1)) <= target) ++p.segments;
+  while (p.segments < 8 && F * static_cast<size_t>((p.segments + 1) * (p.segments + 1)) <= target) ++p.segments;  // F·n² triangles
   const int n = p.segments, per = (n + 1) * (n + 2) / 2;
-  const Eigen::Index K = a.transfer.cols();
   p.positions.resize(static_cast<Eigen::Index>(F) * per, 3);
   p.normals.resize(p.positions.rows(), 3);
-  p.asset.resize(p.positions.rows(), K);
-  p.triangles.reserve(F * static_cast<size_t>(n * n));
   for (size_t f = 0; f < F; ++f) {
     const Triangle& t = a.triangles[f];
     const auto base = static_cast<uint32_t>(f * static_cast<size_t>(per));
@@ -50,9 +47,6 @@ ErrorViewPoints error_view_points(const Asset& a, size_t target) {
         p.positions.row(r) = w0 * a.positions.row(t[0]) + w1 * a.positions.row(t[1]) + w2 * a.positions.row(t[2]);
         const Eigen::RowVector3d nrm = w0 * a.normals.row(t[0]) + w1 * a.normals.row(t[1]) + w2 * a.normals.row(t[2]);
         p.normals.row(r) = nrm.norm() > 0 ? Eigen::RowVector3d(nrm.normalized()) : Eigen::RowVector3d(a.normals.row(t[0]));
-        p.asset.row(r) = w0 * a.transfer.row(t[0]) + w1 * a.transfer.row(t[1]) + w2 * a.transfer.row(t[2]);
-        if (i + j < n) p.triangles.push_back({index(i, j), index(i + 1, j), index(i, j + 1)});
-        if (i + j < n - 1) p.triangles.push_back({index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)});
       }
   }
   return p;
@@ -77,12 +71,11 @@ std::string viewer_data_json(const Asset& asset, const ViewerPageOptions& o) {
   out += "},\"error\":";
   if (o.reference) {
     if (!o.reference->allFinite()) throw InputError("viewer: the reference holds NaN or Inf");
-    const ErrorViewPoints& p = *o.error_points;
-    const auto P = static_cast<size_t>(p.positions.rows());
-    out += "{\"positions\":" + packed<float>(p.positions.data(), 3 * P) + ",\"indices\":" +
-           packed<uint32_t>(p.triangles.empty() ? nullptr : p.triangles[0].data(), 3 * p.triangles.size()) +
-           ",\"asset\":" + packed<float>(p.asset.data(), P * static_cast<size_t>(K)) +
-           ",\"reference\":" + packed<float>(o.reference->data(), P * static_cast<size_t>(K)) + "}";
+    // The page rebuilds the points and their triangles from the segment count (viewer/src/main.js
+    // errorGrid, the same order as error_view_points); only the reference travels.
+    const auto P = static_cast<size_t>(o.error_points->positions.rows());
+    out += "{\"segments\":" + std::to_string(o.error_points->segments) + ",\"reference\":" +
+           packed<float>(o.reference->data(), P * static_cast<size_t>(K)) + "}";
   } else {
     out += "null";
   }

@@ -11,17 +11,16 @@
 namespace prtsub {
 
 //! Where the error view looks: points on a regular grid of barycentrics inside every asset
-//! triangle (n segments an edge), as a triangle soup, with the asset's transfer interpolated
-//! there exactly as a GPU interpolates it; the caller traces the reference at them.
+//! triangle (n segments an edge), triangle by triangle, row i (weight i/n on the second
+//! corner) by column j (j/n on the third); the caller traces the reference at them, and the
+//! page rebuilds the same grid with the asset's transfer interpolated as a GPU interpolates it.
 struct ErrorViewPoints {
   int segments = 1;
   RowMatrixX3d positions, normals;  //!< #P by 3 (normals interpolated and normalised)
-  RowMatrixXd asset;                //!< #P by K: the asset's interpolated values
-  std::vector<Triangle> triangles;  //!< over the points
 };
 
 //! n = the largest of 1..8 with F·n² ≤ target_triangles (at least 1).
-ErrorViewPoints error_view_points(const Asset& asset, size_t target_triangles = 50000);
+ErrorViewPoints error_view_points(const Asset& asset, size_t target_triangles = 20000);
 
 struct ViewerPageOptions {
   std::string name;  //!< shown in the page's title and panel (escaped)

@@ -67,6 +67,21 @@ Mesh asset_mesh(const Asset& a) {
   return m;
 }
 
+Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal) {
+  check_asset_input("(in memory)", mesh, transfer, signal);
+  Asset a;
+  a.positions = vertex_positions(mesh);
+  a.normals = mesh.normals;
+  a.uv = mesh.uv;
+  a.transfer = transfer;
+  a.triangles = mesh.triangles;
+  a.source_face = mesh.source_face;
+  a.metadata = metadata;
+  a.signal = signal;
+  a.order = signal == AssetSignal::Ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(transfer.cols()))));
+  return a;
+}
+
 Metadata sh_convention_metadata(int order) {
   return {
       {"prtsub_asset", "1"},

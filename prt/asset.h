@@ -39,6 +39,10 @@ struct Asset {
 //! vertex (nothing welded), its normals, UVs, triangles and source faces.
 Mesh asset_mesh(const Asset& asset);
 
+//! The asset write_asset would write, without the file: render-vertex positions, the mesh's
+//! normals, UVs, triangles and source faces, the values (order-1 transfer for AO).
+Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer);
+
 //! AO: clamps order-1 transfer into the AO range [0, 1]·(√π/2); returns how many values moved.
 size_t clamp_ao(RowMatrixXd& t0);
 

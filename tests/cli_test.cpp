@@ -454,7 +454,7 @@ TEST_F(Cli, ViewWritesOnePageThatHoldsTheAssetAndEscapesItsName) {
   EXPECT_EQ(inside.triangles, original.triangles);
   const std::string report = read_file_bytes(dir.path("v.json"));
   EXPECT_NE(report.find("\"reference_rays\": 16"), std::string::npos) << report;
-  EXPECT_NE(html.find("\"error\":{\"positions\""), std::string::npos);
+  EXPECT_NE(html.find("\"error\":{\"segments\":"), std::string::npos);
 }
 
 }  // namespace

@@ -220,14 +220,10 @@ async function main() {
   const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
   for (let v = 0; v < V; ++v) for (let c = 0; c < 3; ++c) lo[c] = Math.min(lo[c], asset.positions[3 * v + c]), hi[c] = Math.max(hi[c], asset.positions[3 * v + c]);
   const radius = 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-  // The error view's own mesh: a grid of points in every triangle with the asset's interpolated
-  // transfer and the reference traced there (prtsub view --source).
-  const errorMesh = data.error && {
-    positions: new Float32Array(base64Bytes(data.error.positions).buffer),
-    indices: new Uint32Array(base64Bytes(data.error.indices).buffer),
-    asset: new Float32Array(base64Bytes(data.error.asset).buffer),
-    reference: new Float32Array(base64Bytes(data.error.reference).buffer),
-  };
+  // The error view's own mesh: a grid of points in every triangle (n segments an edge) with the
+  // asset's transfer interpolated there, and the reference the page carries for each point,
+  // in the order of cli/viewer_page.cpp error_view_points.
+  const errorMesh = data.error && errorGrid(asset, data.error.segments, new Float32Array(base64Bytes(data.error.reference).buffer));
   const reference = errorMesh;
 
   const program = gl.createProgram();
@@ -365,6 +361,25 @@ async function main() {
   });
   relight();
   status.ready = true;
+}
+
+function errorGrid(asset, n, reference) {
+  const F = asset.indices.length / 3, K = asset.order * asset.order, per = ((n + 1) * (n + 2)) / 2;
+  const positions = new Float32Array(F * per * 3), values = new Float64Array(F * per * K), indices = [];
+  for (let f = 0; f < F; ++f) {
+    const t = [asset.indices[3 * f], asset.indices[3 * f + 1], asset.indices[3 * f + 2]], base = f * per;
+    const index = (i, j) => base + i * (n + 1) - (i * (i - 1)) / 2 + j;
+    for (let i = 0; i <= n; ++i)
+      for (let j = 0; j <= n - i; ++j) {
+        const w = [1 - i / n - j / n, i / n, j / n], r = index(i, j);
+        for (let c = 0; c < 3; ++c) positions[3 * r + c] = w[0] * asset.positions[3 * t[0] + c] + w[1] * asset.positions[3 * t[1] + c] + w[2] * asset.positions[3 * t[2] + c];
+        for (let k = 0; k < K; ++k) values[r * K + k] = w[0] * asset.transfer[t[0] * K + k] + w[1] * asset.transfer[t[1] * K + k] + w[2] * asset.transfer[t[2] * K + k];
+        if (i + j < n) indices.push(index(i, j), index(i + 1, j), index(i, j + 1));
+        if (i + j < n - 1) indices.push(index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
+      }
+  }
+  if (reference.length !== values.length) throw new Error(`the error view's reference holds ${reference.length} values for ${values.length}`);
+  return { positions, indices: Uint32Array.from(indices), asset: values, reference };
 }
 
 // Mouse: drag orbits the camera about its target, shift-drag (or the right button) turns the
