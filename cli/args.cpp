@@ -135,8 +135,11 @@ bool ArgParser::parse(int argc, char** argv, int first) {
       }
       spec->set(value);
     } else {
-      if (next_positional >= positionals_.size())
-        throw UsageError(command_ + ": unexpected argument '" + arg + "'");
+      if (next_positional >= positionals_.size()) {
+        if (!rest_) throw UsageError(command_ + ": unexpected argument '" + arg + "'");
+        rest_->push_back(arg);
+        continue;
+      }
       *positionals_[next_positional++].second = arg;
     }
   }
@@ -149,6 +152,7 @@ std::string ArgParser::help() const {
   std::ostringstream out;
   out << "usage: prtsub " << command_;
   for (const auto& p : positionals_) out << " " << p.first;
+  if (rest_) out << " [" << rest_name_ << "...]";
   out << " [options]\n\n" << summary_ << "\n\n";
   for (size_t i = 0; i < positionals_.size(); ++i)
     out << "  " << positionals_[i].first << "\n      " << positional_help_[i] << "\n";

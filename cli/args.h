@@ -25,6 +25,8 @@ class ArgParser {
   ArgParser(std::string command, std::string summary);
 
   void positional(const std::string& name, const std::string& help, std::string* out);
+  //! Arguments after the declared positionals are appended here instead of being an error.
+  void rest(const std::string& name, std::vector<std::string>* out) { rest_name_ = name, rest_ = out; }
   void option(const std::string& name, const std::string& metavar, const std::string& help, std::string* out);
   void option(const std::string& name, const std::string& metavar, const std::string& help, int* out, int lo, int hi);
   void option(const std::string& name, const std::string& metavar, const std::string& help, uint64_t* out);
@@ -68,6 +70,8 @@ class ArgParser {
   std::vector<Spec> options_;
   std::vector<std::pair<std::string, std::string>> aliases_;
   std::vector<std::pair<std::string, std::string*>> positionals_;
+  std::string rest_name_;
+  std::vector<std::string>* rest_ = nullptr;
   std::vector<std::string> positional_help_;
 };
 

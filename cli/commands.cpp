@@ -5,38 +5,130 @@
 #include "cli/images.h"
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <cstring>
 #include <map>
 #include <string>
 
 #include "cli/args.h"
+#include "cli/escape.h"
 #include "cli/options.h"
 #include "cli/report.h"
 #include "cli/summary.h"
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/batch.h"
 #include "prtsub/prt/evaluate.h"
+#include "prtsub/prt/output_file.h"
 #include "prtsub/prt/gltf.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/mesh_io.h"
+#include "prtsub/subdiv/ply.h"
 #include "prtsub/subdiv/stopwatch.h"
 #include "prtsub/version.h"
 
 namespace prtsub {
 namespace {
 
+// bake with several inputs, a folder or an @list: one process, DIR/NAME.EXT per input, a report
+// beside each asset and DIR/batch.csv and batch.json for the whole batch.
+int bake_many(const BakeCli& cli, const std::vector<std::string>& inputs, const std::string& out_dir, const BakeOptions& options,
+              const GltfOptions& gltf, const std::string& format, bool force) {
+  Stopwatch clock;
+  const std::vector<BatchJob> jobs = batch_jobs(inputs, out_dir, "." + format);
+  if (jobs.empty()) throw InputError("bake: no mesh files (.obj, .ply, .off, .stl) in the inputs");
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw IoError(out_dir + ": cannot create the output folder (" + ec.message() + ")");
+  BatchOptions b;
+  b.bake = options, b.load = cli.load, b.gltf = gltf, b.force = force;
+  BatchProgress progress;
+  progress.done = [&](size_t i, size_t total, const BatchEntry& e, const BakeResult* result) {
+    if (e.status == BatchStatus::Failed) {
+      std::fprintf(stderr, "prtsub: error: %s\n", e.error.c_str());
+      std::printf("[%zu/%zu] %s: failed\n", i + 1, total, e.job.input.c_str());
+    } else if (e.status == BatchStatus::Skipped) {
+      std::printf("[%zu/%zu] %s: up to date, skipped (%s)\n", i + 1, total, e.job.input.c_str(), e.job.output.c_str());
+    } else {
+      std::printf("[%zu/%zu] %s -> %s: %zu triangles, %.3g rays, %.2f s\n", i + 1, total, e.job.input.c_str(), e.job.output.c_str(),
+                  e.triangles_out, static_cast<double>(e.rays), e.seconds);
+    }
+    std::fflush(stdout);
+    if (result) {  // the same report a single bake writes, beside the asset
+      Report r;
+      r.set("command", "bake");
+      r.set("input", e.job.input);
+      r.set("output", e.job.output);
+      record(r, *result, options);
+      r.set("bake_key", e.key);
+      r.set("seconds_total", e.seconds);
+      std::filesystem::path report = e.job.output;
+      r.write(report.replace_extension(".report.json").string());
+    }
+  };
+  const std::vector<BatchEntry> entries = bake_batch(jobs, b, progress);
+
+  size_t baked = 0, skipped = 0, failed = 0;
+  uint64_t rays = 0;
+  std::string csv = "input,output,status,triangles_in,triangles_out,vertices_out,rays,seconds,key,error\n";
+  std::string json = "{\n  \"assets\": [";
+  auto csv_field = [](const std::string& v) {
+    std::string q = "\"";
+    for (char ch : v) q += ch == '"' ? std::string("\"\"") : std::string(1, ch == '\n' ? ' ' : ch);
+    return q + "\"";
+  };
+  char number[64];
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const BatchEntry& e = entries[i];
+    baked += e.status == BatchStatus::Baked, skipped += e.status == BatchStatus::Skipped, failed += e.status == BatchStatus::Failed;
+    rays += e.rays;
+    std::snprintf(number, sizeof number, "%.6g", e.seconds);
+    csv += csv_field(e.job.input) + "," + csv_field(e.job.output) + "," + batch_status_name(e.status) + "," + std::to_string(e.triangles_in) +
+           "," + std::to_string(e.triangles_out) + "," + std::to_string(e.vertices_out) + "," + std::to_string(e.rays) + "," + number + "," +
+           e.key + "," + csv_field(e.error) + "\n";
+    json += std::string(i ? "," : "") + "\n    {\"input\": " + json_quote(e.job.input) + ", \"output\": " + json_quote(e.job.output) +
+            ", \"status\": \"" + batch_status_name(e.status) + "\", \"triangles_in\": " + std::to_string(e.triangles_in) +
+            ", \"triangles_out\": " + std::to_string(e.triangles_out) + ", \"vertices_out\": " + std::to_string(e.vertices_out) +
+            ", \"rays\": " + std::to_string(e.rays) + ", \"seconds\": " + number + ", \"key\": \"" + e.key + "\", \"error\": " +
+            json_quote(e.error) + "}";
+  }
+  json += "\n  ]\n}\n";
+  write_file_atomically(out_dir + "/batch.csv", csv);
+  write_file_atomically(out_dir + "/batch.json", json);
+  Report r;
+  r.set("command", "bake");
+  r.set("output", out_dir);
+  r.set("assets", entries.size());
+  r.set("baked", baked);
+  r.set("skipped", skipped);
+  r.set("failed", failed);
+  r.set("rays", rays);
+  r.set("seconds_total", clock.total());
+  r.set("peak_memory_mib", peak_memory_mib());
+  r.print(stdout, {"prtsub bake: {assets} assets -> {output}: {baked} baked, {skipped} up to date, {failed} failed, {seconds_total:2} s "
+                   "(batch.csv, batch.json)"});
+  if (!cli.report.empty()) r.write(cli.report);
+  return failed ? 1 : 0;
+}
+
 int cmd_bake(int argc, char** argv) {
   BakeCli cli;
-  std::string output, up = "y";
+  std::string output, up = "y", format = "ply";
+  std::vector<std::string> more;
+  bool force = false;
   GltfOptions gltf;
   ArgParser args("bake", "Computes shadowed SH transfer at every vertex and writes a PRT asset: a binary PLY, or glTF 2.0\n"
                          "when ASSET ends in .glb or .gltf. With --refine, first refines the mesh: adaptively to a\n"
-                         "triangle budget where the transfer changes, or uniformly (OpenSubdiv) as a baseline.");
+                         "triangle budget where the transfer changes, or uniformly (OpenSubdiv) as a baseline.\n"
+                         "Several inputs, a folder or @LIST (one path per line) bake in one process into -o DIR.");
   cli.add_common(args);
-  args.option("--output", "ASSET", "output asset, .ply, .glb or .gltf (required)", &output);
+  args.rest("INPUT", &more);
+  args.option("--output", "ASSET|DIR", "output asset, .ply, .glb or .gltf; a folder for several inputs (required)", &output);
   args.alias("-o", "--output");
+  args.option("--format", "ply|glb|gltf", "several inputs: the assets' format [default ply]", &format);
+  args.flag("--force", "several inputs: bake even the assets that are up to date", &force);
   args.option("--up", "y|z", "glTF: the input's up axis; z rotates positions, normals and SH to glTF's +Y up (default y)", &up);
   args.flag("--quantize", "glTF: transfer as normalized SHORT with a scale per coefficient (half the size)", &gltf.quantize);
   args.flag("--compress", "glTF: EXT_meshopt_compression (required by the file; most engines and three.js decode it)", &gltf.compress);
@@ -46,6 +138,15 @@ int cmd_bake(int argc, char** argv) {
   if (output.empty()) throw UsageError("bake: missing -o ASSET.ply");
   if (up != "y" && up != "z") throw UsageError("bake: --up takes y or z, not '" + up + "'");
   gltf.up = parse_up_axis(up);
+  std::error_code ec;
+  if (!more.empty() || cli.input.rfind('@', 0) == 0 || std::filesystem::is_directory(cli.input, ec)) {
+    if (format != "ply" && format != "glb" && format != "gltf") throw UsageError("--format: takes ply, glb or gltf, not '" + format + "'");
+    if (format == "ply" && (gltf.quantize || gltf.compress || gltf.up != UpAxis::Y))
+      throw UsageError("bake: --up, --quantize and --compress are for glTF outputs (--format glb or gltf)");
+    if (!cli.report.empty()) check_writable(cli.report);
+    more.insert(more.begin(), cli.input);
+    return bake_many(cli, more, output, cli.options(), gltf, format, force);
+  }
   const bool to_gltf = is_gltf_path(output);
   if (!to_gltf && (gltf.quantize || gltf.compress || gltf.up != UpAxis::Y))
     throw UsageError("bake: --up, --quantize and --compress are for glTF outputs (-o ASSET.glb or .gltf)");
@@ -54,11 +155,17 @@ int cmd_bake(int argc, char** argv) {
   if (!cli.report.empty()) check_writable(cli.report);
 
   Stopwatch clock;
-  const Mesh mesh = load_mesh(cli.input, cli.load);
+  const std::string bytes = read_file_bytes(cli.input);
+  const Mesh mesh = parse_mesh(bytes, cli.input, cli.load);
   const double seconds_load = clock.lap();
   StageProgress progress;
-  const BakeResult res = bake(mesh, options, progress.callbacks());
+  BakeResult res = bake(mesh, options, progress.callbacks());
   progress.finish();
+  // The batch's content key, so that a later batch over the same inputs skips this asset.
+  BatchOptions key_options;
+  key_options.bake = options, key_options.load = cli.load, key_options.gltf = gltf;
+  const std::string key = bake_key(bytes, key_options, output);
+  res.metadata.push_back({"bake_key", key});
   clock.lap();
   if (to_gltf) write_gltf_asset(output, res.mesh, res.transfer, res.metadata, options.signal, gltf);
   else write_asset(output, res.mesh, res.transfer, res.metadata, options.signal);
@@ -69,6 +176,7 @@ int cmd_bake(int argc, char** argv) {
   r.set("input", cli.input);
   r.set("output", output);
   record(r, res, options);
+  r.set("bake_key", key);
   r.set("seconds_total", clock.total());
   r.set("seconds_load", seconds_load);
   r.set("seconds_write", seconds_write);

@@ -33,6 +33,9 @@ if(NOT TARGET OpenImageIO::OpenImageIO)
   target_link_libraries(OpenImageIO::OpenImageIO INTERFACE PkgConfig::OIIO)
 endif()
 
+# xxHash (the batch's content keys): Debian ships pkg-config's file and no CMake one.
+pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)
+
 # CHOLMOD (SuiteSparse) for the least-squares fit's factorisation: no CMake or pkg-config file
 # in Debian. Its supernodal factorisation runs on BLAS: .ci/deps installs OpenBLAS, ~3x faster
 # than Debian's reference BLAS (STACK.md).

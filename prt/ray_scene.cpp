@@ -19,6 +19,11 @@ struct RayScene::ErrorState {
   std::string message;
 };
 
+struct RayScene::Device {
+  ErrorState errors;
+  EmbreeDevice device;
+};
+
 namespace {
 
 void on_embree_error(void* user, RTCError code, const char* message) {
@@ -32,23 +37,43 @@ void on_embree_error(void* user, RTCError code, const char* message) {
 
 }  // namespace
 
+namespace {
+
+// The process's device: kept while any scene holds it, made again after the last one goes.
+std::shared_ptr<RayScene::Device> shared_device() {
+  static std::mutex mutex;
+  static std::weak_ptr<RayScene::Device> current;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (auto d = current.lock()) return d;
+  auto d = std::make_shared<RayScene::Device>();
+  d->device.reset(rtcNewDevice(nullptr));
+  if (!d->device) throw EmbreeError("Embree: cannot create device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
+  rtcSetDeviceErrorFunction(d->device.get(), on_embree_error, &d->errors);
+  current = d;
+  return d;
+}
+
+}  // namespace
+
 RayScene::RayScene(const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
-                   const RaySceneOptions& options)
-    : error_(std::make_unique<ErrorState>()) {
+                   const RaySceneOptions& options) {
   if (positions.rows() == 0 || triangles.empty()) throw EmbreeError("ray scene: no triangles");
   Bounds b = bounds(positions);
   centre_ = b.centre();
   diagonal_ = b.diagonal();
   offset_ = options.relative_offset * diagonal_;
 
-  device_.reset(rtcNewDevice(nullptr));
-  if (!device_) throw EmbreeError("Embree: cannot create device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
-  rtcSetDeviceErrorFunction(device_.get(), on_embree_error, error_.get());
-  scene_.reset(rtcNewScene(device_.get()));
+  device_ = shared_device();
+  {
+    std::lock_guard<std::mutex> lock(device_->errors.mutex);  // an earlier scene's error is not this one's
+    device_->errors.code = RTC_ERROR_NONE;
+    device_->errors.message.clear();
+  }
+  scene_.reset(rtcNewScene(device_->device.get()));
   check("creating the scene");
   rtcSetSceneBuildQuality(scene_.get(), RTC_BUILD_QUALITY_MEDIUM);
 
-  const EmbreeGeometry geom(rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
+  const EmbreeGeometry geom(rtcNewGeometry(device_->device.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
   check("creating the geometry");
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                           3 * sizeof(float), static_cast<size_t>(positions.rows())));
@@ -68,12 +93,12 @@ RayScene::RayScene(const RowMatrixX3d& positions, const std::vector<Triangle>& t
   check("building the scene");
 }
 
-RayScene::~RayScene() = default;
+RayScene::~RayScene() = default;  // the scene first, then (if it was the last) the device
 
 void RayScene::check(const char* what) const {
-  std::lock_guard<std::mutex> lock(error_->mutex);
-  if (error_->code != RTC_ERROR_NONE)
-    throw EmbreeError(std::string("Embree error while ") + what + ": " + error_->message);
+  std::lock_guard<std::mutex> lock(device_->errors.mutex);
+  if (device_->errors.code != RTC_ERROR_NONE)
+    throw EmbreeError(std::string("Embree error while ") + what + ": " + device_->errors.message);
 }
 
 float RayScene::ray_offset(const Eigen::Vector3f& local_point) const {

@@ -29,9 +29,11 @@ using EmbreeDevice = std::unique_ptr<RTCDeviceTy, EmbreeRelease>;
 using EmbreeScene = std::unique_ptr<RTCSceneTy, EmbreeRelease>;
 using EmbreeGeometry = std::unique_ptr<RTCGeometryTy, EmbreeRelease>;
 
-//! An Embree device and committed triangle scene in local coordinates: the bounding box's
-//! centre is subtracted in double before converting to float, so a scene far from the
-//! origin keeps its full float precision.
+//! A committed Embree triangle scene in local coordinates: the bounding box's centre is
+//! subtracted in double before converting to float, so a scene far from the origin keeps its
+//! full float precision. Every scene of the process is built on one Embree device (made with the
+//! first scene, released with the last), so a batch of bakes pays for the device once; Embree's
+//! errors are recorded per device, so check() reports the first error since this scene was made.
 class RayScene {
  public:
   //! \param positions #P by 3
@@ -53,10 +55,10 @@ class RayScene {
   void check(const char* what) const;
 
   struct ErrorState;  //!< what Embree's error callback recorded
+  struct Device;      //!< the process's one Embree device and its error state
 
  private:
-  std::unique_ptr<ErrorState> error_;
-  EmbreeDevice device_;
+  std::shared_ptr<Device> device_;  // shared by every scene: a batch of bakes makes one device
   EmbreeScene scene_;
   Eigen::Vector3d centre_;
   double diagonal_ = 0;

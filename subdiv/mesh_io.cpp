@@ -548,11 +548,24 @@ Mesh build_mesh(const RawMesh& raw, const std::string& path, const LoadOptions& 
   return mesh;
 }
 
-Mesh load_mesh(const std::string& path, const LoadOptions& options) {
+namespace {
+
+void check_mesh_extension(const std::string& path) {
   const std::string ext = lower_extension(path);
   if (ext != "obj" && ext != "ply" && ext != "off" && ext != "stl")
     throw InputError(path + ": unknown mesh format '." + ext + "' (expected .obj, .ply, .off or .stl)");
-  const std::string bytes = read_file_bytes(path);
+}
+
+}  // namespace
+
+Mesh load_mesh(const std::string& path, const LoadOptions& options) {
+  check_mesh_extension(path);
+  return parse_mesh(read_file_bytes(path), path, options);
+}
+
+Mesh parse_mesh(const std::string& bytes, const std::string& path, const LoadOptions& options) {
+  check_mesh_extension(path);
+  const std::string ext = lower_extension(path);
   RawMesh raw = ext == "obj"   ? parse_obj(bytes, path)
                 : ext == "ply" ? parse_ply_mesh(bytes, path)
                 : ext == "off" ? parse_off(bytes, path)

@@ -31,6 +31,9 @@ struct LoadOptions {
 //! \throw IoError if unreadable, InputError naming the file and the problem otherwise.
 Mesh load_mesh(const std::string& path, const LoadOptions& options = {});
 
+//! load_mesh on bytes already read: the format is chosen by `path`'s extension.
+Mesh parse_mesh(const std::string& bytes, const std::string& path, const LoadOptions& options = {});
+
 //! Parses one format from bytes (path only names the source in messages).
 RawMesh parse_obj(const std::string& bytes, const std::string& path);
 RawMesh parse_off(const std::string& bytes, const std::string& path);

@@ -431,6 +431,43 @@ TEST_F(Cli, CompareEscapesTheInputsNameInItsPageAndTables) {
   EXPECT_NE(json.find("a\\u003cimg src=x onerror=alert(1)\\u003e\\\"q'.obj"), std::string::npos) << json.substr(0, 200);
 }
 
+// A batch is one process: every asset is the one a single bake writes, byte for byte; a bad
+// input is one line on stderr and exit 1 while the others are written; a second run skips all.
+TEST_F(Cli, BatchAssetsAreTheSingleBakesAndABadFileFailsAlone) {
+  std::filesystem::create_directories(dir.path("in"));
+  test::write_obj(dir.path("in/a.obj"), test::merge(test::icosphere(0), test::quad(2.0, -1.0, true)));
+  test::write_obj(dir.path("in/b.obj"), test::cube());
+  test::write_text(dir.path("in/broken.obj"), "v 0 0 0\nv 1 0 0\nv nan 0 1\nf 1 2 3\n");
+  const std::vector<std::string> options = {"--rays", "16", "--order", "3"};
+  auto with = [&](std::vector<std::string> args) {
+    args.insert(args.end(), options.begin(), options.end());
+    return args;
+  };
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run(with({"bake", dir.path("in"), "-o", dir.path("out"), "--format", "glb", "--report", dir.path("batch_report.json")})), 1);
+  const std::string out = testing::internal::GetCapturedStdout(), err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(err, "prtsub: error: " + dir.path("in/broken.obj") + ": vertex 2 has a non-finite coordinate\n") << err;
+  EXPECT_NE(out.find("[3/3]"), std::string::npos) << out;
+  EXPECT_NE(out.find("3 assets -> " + dir.path("out") + ": 2 baked, 0 up to date, 1 failed"), std::string::npos) << out;
+  testing::internal::CaptureStdout();
+  for (const char* name : {"a", "b"}) {
+    ASSERT_EQ(run(with({"bake", dir.path(std::string("in/") + name + ".obj"), "-o", dir.path(std::string(name) + ".glb")})), 0);
+    EXPECT_EQ(read_file_bytes(dir.path(std::string("out/") + name + ".glb")), read_file_bytes(dir.path(std::string(name) + ".glb"))) << name;
+    EXPECT_TRUE(test::file_exists(dir.path(std::string("out/") + name + ".report.json"))) << name;
+  }
+  testing::internal::GetCapturedStdout();
+  const std::string csv = read_file_bytes(dir.path("out/batch.csv"));
+  EXPECT_NE(csv.find(",failed,"), std::string::npos) << csv;
+  EXPECT_NE(read_file_bytes(dir.path("out/batch.json")).find("\"status\": \"baked\""), std::string::npos);
+  EXPECT_NE(read_file_bytes(dir.path("batch_report.json")).find("\"failed\": 1"), std::string::npos);
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run(with({"bake", dir.path("in/a.obj"), dir.path("in/b.obj"), "-o", dir.path("out"), "--format", "glb"})), 0);
+  testing::internal::GetCapturedStderr();
+  EXPECT_NE(testing::internal::GetCapturedStdout().find("0 baked, 2 up to date, 0 failed"), std::string::npos);
+}
+
 // view embeds the asset and the viewer in one page; a hostile file name reaches it only escaped,
 // and the asset inside is the one on disk (decoded from the page's base64 GLB).
 TEST_F(Cli, ViewWritesOnePageThatHoldsTheAssetAndEscapesItsName) {
