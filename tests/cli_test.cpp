@@ -431,6 +431,38 @@ TEST_F(Cli, CompareEscapesTheInputsNameInItsPageAndTables) {
   EXPECT_NE(json.find("a\\u003cimg src=x onerror=alert(1)\\u003e\\\"q'.obj"), std::string::npos) << json.substr(0, 200);
 }
 
+// Every reader of assets takes glTF: inspect, eval and render give what they give for the PLY of
+// the same bake, also for a Z-up, quantized, compressed file (read back in the source's axes).
+TEST_F(Cli, InspectEvalAndRenderReadGltfAssetsAsThePlyOfTheSameBake) {
+  const std::string in = scene();
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", dir.path("a.ply"), "--rays", "16", "--order", "3"}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", dir.path("a.glb"), "--rays", "16", "--order", "3", "--up", "z", "--compress"}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", dir.path("q.gltf"), "--rays", "16", "--order", "3", "--quantize"}), 0);
+  for (const char* name : {"a.ply", "a.glb", "q.gltf"}) {
+    const std::string asset = dir.path(name), stem = std::string(name).substr(0, std::string(name).find('.')) + std::string(name).substr(std::string(name).find('.') + 1);
+    ASSERT_EQ(run({"inspect", asset, "--report", dir.path(stem + "_inspect.json")}), 0) << name;
+    ASSERT_EQ(run({"eval", asset, "--source", in, "--rays", "64", "--points", "2000", "--report", dir.path(stem + "_eval.json")}), 0) << name;
+    ASSERT_EQ(run({"render", asset, "--light", "sky", "--size", "64,48", "-o", dir.path(stem + ".exr")}), 0) << name;
+  }
+  testing::internal::GetCapturedStdout();
+  auto number = [&](const std::string& file, const std::string& key) {
+    const std::string text = read_file_bytes(dir.path(file));
+    const size_t at = text.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << file << " " << key;
+    return at == std::string::npos ? NAN : std::atof(text.c_str() + at + key.size() + 4);
+  };
+  for (const std::string stem : {"aglb", "qgltf"}) {
+    EXPECT_EQ(number(stem + "_inspect.json", "vertices"), number("aply_inspect.json", "vertices"));
+    EXPECT_NEAR(number(stem + "_inspect.json", "energy_fraction_band_1"), number("aply_inspect.json", "energy_fraction_band_1"), 1e-4);
+    EXPECT_NEAR(number(stem + "_eval.json", "rms_percent"), number("aply_eval.json", "rms_percent"), stem == "aglb" ? 1e-4 : 0.01);
+  }
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"diff", dir.path("aglb.exr"), dir.path("aply.exr"), "--report", dir.path("diff.json")}), 0);
+  testing::internal::GetCapturedStdout();
+  EXPECT_LT(number("diff.json", "rmse_relative"), 1e-5);
+}
+
 // A batch is one process: every asset is the one a single bake writes, byte for byte; a bad
 // input is one line on stderr and exit 1 while the others are written; a second run skips all.
 TEST_F(Cli, BatchAssetsAreTheSingleBakesAndABadFileFailsAlone) {

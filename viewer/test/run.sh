@@ -3,8 +3,8 @@
 # builds to; then pages `prtsub view` writes for the bundled example, loaded in headless chromium
 # at fixed views, match `prtsub render`'s frames of the same asset (viewer/test/viewer_test.mjs),
 # under every kind of light, an environment map, a rotated light and the automatic camera; the
-# AO view of an AO asset; the error view loads; and compare's report renders with its plots,
-# frames and embedded viewer. Exit 77 (skip) without chromium, Node.js or
+# AO view of an AO asset; the error view loads; dragging, the wheel and the panel redraw it
+# (interaction_test.mjs); and compare's report renders with its plots, frames and embedded viewer. Exit 77 (skip) without chromium, Node.js or
 # `npm ci` in viewer/, except in CI, where that is a failure.
 #   bash viewer/test/run.sh PRTSUB_BINARY WORK_DIR
 set -euo pipefail
@@ -49,6 +49,9 @@ check auto_camera "$work/spot.html" "$work/ref_auto.png" "light=sky"
 "$prtsub" render "$work/spot_ao.glb" --light const:1 --albedo 1 --camera "$camera" --size "$size" -o "$work/ref_ao.png" > /dev/null
 check ao_view "$work/spot_ao.html" "$work/ref_ao.png" "view=ao&camera=$camera"
 check error_view "$work/spot.html" - "view=error&light=sky&camera=$camera"
+# The mouse and the panel: drags, the wheel, the light menu and the views redraw and change it.
+echo "== interaction"
+node test/interaction_test.mjs "$work/spot.html" || failed=1
 # compare's report: plots, frames, heat maps and the embedded viewer render (report_test.mjs).
 echo "== report"
 "$prtsub" compare "$mesh" --budgets 1488 --max-levels 1 --estimates root --frame-size 240,180 --frame-rays 64 --eval-points 2000 \
