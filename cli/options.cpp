@@ -36,6 +36,11 @@ void BakeCli::add_fit(ArgParser& args) {
   SampleOptions& s = bake.samples;
   args.choice("--signal", "what to bake: SH transfer, or ambient occlusion (one ao value)", &bake.signal,
               {AssetSignal::Transfer, AssetSignal::Ao}, asset_signal_name);
+  args.option("--bounces", "N|auto", "interreflection: N bounces of light between the mesh's surfaces (0: direct only), or auto:\n"
+              "until a pass adds less than the bake's own noise (at most 16) [default 0]", &bounces_);
+  args.option("--albedo", "A", "interreflection: the surfaces' diffuse albedo [default 0.8]", &bake.bounce.albedo, 0.0, 1.0);
+  args.choice("--bounce-cache", "interreflection: keep each ray's hit between passes (auto: while under 1 GiB)", &bake.bounce.cache,
+              {BounceCache::Auto, BounceCache::On, BounceCache::Off}, bounce_cache_name);
   args.choice("--fit", "vertex values: traced at the vertex, averaged from surface samples, or the least-squares fit\n"
               "to them (Kavan et al. 2011)", &f.method, {FitMethod::Point, FitMethod::Average, FitMethod::LeastSquares}, fit_method_name);
   args.option("--alpha", "A", "lsq: regulariser weight; 0 is the plain least-squares optimum", &f.alpha, 0.0, 1e12);
@@ -95,6 +100,15 @@ void BakeCli::add_refinement(ArgParser& args) {
 
 BakeOptions BakeCli::options() const {
   BakeOptions o = bake;
+  if (bounces_ == "auto") {
+    o.bounce.until_converged = true, o.bounce.bounces = 16;
+  } else if (!bounces_.empty()) {
+    char* end = nullptr;
+    const long n = std::strtol(bounces_.c_str(), &end, 10);
+    if (end != bounces_.c_str() + bounces_.size() || n < 0 || n > 64)
+      throw UsageError("--bounces: expected 0 to 64 or auto, got '" + bounces_ + "'");
+    o.bounce.bounces = static_cast<int>(n);
+  }
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;
   o.source = input;

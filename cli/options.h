@@ -42,6 +42,7 @@ struct BakeCli {
 
  private:
   bool no_control_variate_ = false, no_noise_weighting_ = false;
+  std::string bounces_;  // --bounces N|auto
 };
 
 //! One progress line per pipeline stage, on a terminal.

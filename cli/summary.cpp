@@ -140,6 +140,18 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   }
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
+  r.set("bounces", res.bounce.passes);
+  if (res.bounce.passes > 0) {
+    r.set("albedo", o.bounce.albedo);
+    r.set("bounces_auto", o.bounce.until_converged);
+    r.set("bounce_change_percent", res.bounce.change_percent.back());
+    for (size_t k = 0; k < res.bounce.change_percent.size(); ++k)
+      r.set("bounce_change_percent_" + std::to_string(k + 1), res.bounce.change_percent[k]);
+    r.set("bounce_rays", res.bounce.rays);
+    r.set("bounce_cached", res.bounce.cached);
+    r.set("bounce_cache_mib", res.bounce.cache_mib);
+    r.set("seconds_bounce", res.seconds_bounce);
+  }
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
   record_ray_spread(r, res.vertex_rays, o.transfer.rays);
@@ -196,6 +208,9 @@ void print_bake_summary(const Report& r) {
                      "clamped into [0, 1]"});
   else
     r.print(stdout, {"  transfer:   order {order} ({coefficients} coefficients), {rays_per_vertex} rays per vertex, seed {seed}"});
+  if (r.number("bounces") > 0)
+    r.print(stdout, {"  bounces:    {bounces} of interreflection, albedo {albedo}; the last added {bounce_change_percent:3}% of "
+                     "||t_unshadowed|| ({bounce_rays} rays, {seconds_bounce:3} s)"});
   if (fit == "average")
     r.print(stdout, {"  fit:        average of {samples} surface samples ({sample_rays} rays each, {seconds_samples:3} s), averaged in "
                      "{seconds_fit:3} s"});

@@ -40,6 +40,10 @@ const char* refinement_name(Refinement r) {
 
 void check_bake_options(const BakeOptions& o) {
   check_transfer_options(o.transfer);
+  if (o.bounce.bounces < 0 || o.bounce.bounces > 64) throw InputError("bounces must be between 0 and 64, got " + std::to_string(o.bounce.bounces));
+  if (!(o.bounce.albedo >= 0 && o.bounce.albedo <= 1)) throw InputError("albedo must be between 0 and 1, got " + std::to_string(o.bounce.albedo));
+  if (o.bounce.bounces > 0 && o.signal == AssetSignal::Ao)
+    throw InputError("interreflection is for transfer assets: ambient occlusion is visibility, not light");
   if (o.sample_rays < 1 || o.sample_rays > (1 << 20))
     throw InputError("rays per sample must be between 1 and 1048576, got " + std::to_string(o.sample_rays));
   if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw InputError("adaptive refinement needs a triangle budget");
@@ -109,6 +113,7 @@ BakeOptions resolve_bake_options(const BakeOptions& in) {
   if (o.signal == AssetSignal::Ao) o.transfer.order = 1;
   o.samples.seed = mix64(o.transfer.seed + 17);
   o.fit.threads = o.transfer.threads;
+  o.bounce.rays = o.transfer.rays, o.bounce.seed = o.transfer.seed, o.bounce.threads = o.transfer.threads;
   return o;
 }
 
@@ -159,6 +164,13 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"mass", mass_matrix_name(o.fit.mass)});
     m.push_back({"noise_weighting", o.fit.weigh_by_noise ? "on" : "off"});
     m.push_back({"non_negative", non_negative_name(o.fit.non_negative)});
+  }
+  if (r.bounce.passes > 0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%d (albedo %.4g; the last pass added %.4f%% of ||t_unshadowed||%s)", r.bounce.passes, o.bounce.albedo,
+                  r.bounce.change_percent.back(), o.bounce.until_converged ? ", auto: below the bake's noise" : "");
+    m.push_back({"bounces", buf});
+    m.push_back({"interreflection", "t_i holds the bounces: each adds (albedo/pi)*integral((1-V)*t_i(hit)*max(n.w,0)); back faces black; radiance=albedo/pi*sum(l_i*t_i)"});
   }
   m.push_back({"generator", std::string("prtsub ") + kVersion});
   return m;
@@ -366,6 +378,20 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   if (r.point.size() == 0) r.point = r.transfer;
   if (r.fit_data.allocation == SampleAllocation::Pilot) r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
   if (o.target_error > 0) reach_target(scene, o, progress, clock, r);
+  if (o.bounce.bounces > 0) {
+    BounceOptions b = o.bounce;
+    if (b.until_converged) {  // the bake's own noise, in eval's unit, as the stopping point
+      const std::vector<double> area = vertex_areas(r.mesh);
+      double num = 0, den = 0;
+      for (size_t i = 0; i < area.size(); ++i)
+        if (std::isfinite(r.point_variance[i])) num += area[i] * r.point_variance[i], den += area[i];
+      b.noise_percent = 100 * std::sqrt(num / std::max(den, 1e-300)) / unshadowed_norm(o.transfer.order);
+    }
+    if (progress.stage) progress.stage("bounces", 0);
+    r.transfer = interreflected_transfer(r.mesh, scene, r.transfer, b, &r.bounce);
+    r.rays += r.bounce.rays;
+    r.seconds_bounce = clock.lap();
+  }
   if (o.signal == AssetSignal::Ao) {
     // The paper's choice: clamp after the fit (a constrained solve is rarely worth it).
     r.clamped = clamp_ao(r.transfer);

@@ -18,6 +18,7 @@
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/error_estimate.h"
 #include "prtsub/prt/fit.h"
+#include "prtsub/prt/interreflection.h"
 #include "prtsub/prt/refine_signal.h"
 #include "prtsub/prt/sample_plan.h"
 #include "prtsub/prt/vertex_top_up.h"
@@ -57,6 +58,10 @@ struct BakeOptions {
   double target_error = 0;
   //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
   int sample_rays = 16;
+  //! Interreflection (transfer only): bounces, albedo, the cache; its rays, seed and threads are
+  //! the transfer's. Applied to the asset's values after the fit (refinement and the fit see
+  //! direct transfer).
+  BounceOptions bounce;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
 };
 
@@ -95,9 +100,10 @@ struct BakeResult {
   size_t target_samples = 0;        //!< --error: the samples they added ...
   uint64_t target_sample_rays = 0;  //!< ... and their rays
   FitStats fit;
+  BounceStats bounce;    //!< interreflection's passes (none when bounce.bounces is 0)
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
   uint64_t rays = 0;     //!< every transfer ray traced
-  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_top_up = 0, seconds_target = 0, seconds_fit = 0,
+  double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_top_up = 0, seconds_target = 0, seconds_fit = 0, seconds_bounce = 0,
          seconds_total = 0;
   std::vector<std::string> warnings;
   Metadata metadata;     //!< what the asset records

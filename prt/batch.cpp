@@ -59,6 +59,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   const PilotOptions& p = o.pilot;
   s << "pilot " << p.per_triangle << " " << p.min_samples << " " << p.rays << " " << p.rings << " " << p.significance << " " << p.area_share
     << " " << p.holdout << " " << p.first_share << " " << p.first_significance << "\n";
+  s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << "\n";
   s << "crease " << b.load.crease_angle_deg << "\n";
   s << "gltf " << (b.gltf.up == UpAxis::Z ? "z" : "y") << " " << b.gltf.quantize << " " << b.gltf.compress << "\n";
   return s.str();

@@ -116,10 +116,14 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "levels") o.uniform.levels = value.cast<int>();
     else if (key == "error") o.target_error = value.cast<double>();
     else if (key == "sample_rays") o.sample_rays = value.cast<int>();
+    else if (key == "bounces") {
+      if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.bounce.until_converged = true, o.bounce.bounces = 16;
+      else o.bounce.bounces = value.cast<int>();
+    } else if (key == "albedo") o.bounce.albedo = value.cast<double>();
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, error, sample_rays, source)");
+                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, error, sample_rays, bounces, albedo, source)");
   }
   if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw InputError("refine='adaptive' needs budget=T triangles");
   return o;
@@ -153,6 +157,7 @@ PyAsset bake_mesh(const Mesh& mesh, const BakeOptions& options) {
   s["predicted_error_percent"] = r.predicted.percent;
   s["predicted_error_standard_error"] = r.predicted.standard_error;
   s["fit_samples"] = r.fit_data.samples.face.size();
+  s["bounces"] = r.bounce.passes;
   a.stats = s;
   return a;
 }
@@ -273,7 +278,8 @@ PYBIND11_MODULE(prtsub, m) {
       }, py::arg("mesh_or_vertices"), py::arg("faces") = py::none(),
       "bake(vertices, faces, **options) or bake(mesh, **options): the whole pipeline, as `prtsub bake`.\n"
       "Options: order, rays, seed, threads, signal ('transfer'|'ao'), fit ('point'|'average'|'lsq'), alpha,\n"
-      "refine ('none'|'adaptive'|'uniform'), budget, levels, error (target %), sample_rays, source.");
+      "refine ('none'|'adaptive'|'uniform'), budget, levels, error (target %), sample_rays, bounces (N or 'auto'),\n"
+      "albedo, source.");
 
   m.def("load", [](const std::string& path) {
         const Asset in = read_asset(path);

@@ -113,6 +113,16 @@ class BakeTest(unittest.TestCase):
         self.assertEqual(b.signal, "ao")
         np.testing.assert_allclose(b.ao, a.ao, atol=1e-6)
 
+    def test_bounces_add_light_as_the_tool_does(self):
+        write_obj(self.path("box.obj"), self.vertices, self.faces)
+        ours = prtsub.bake(self.vertices, self.faces, order=2, rays=32, fit="point", bounces=2, albedo=0.5)
+        subprocess.run([BINARY, "bake", self.path("box.obj"), "-o", self.path("b.ply"), "--order", "2", "--rays", "32", "--fit", "point",
+                        "--bounces", "2", "--albedo", "0.5"], check=True, capture_output=True)
+        np.testing.assert_allclose(ours.transfer, prtsub.load(self.path("b.ply")).transfer, rtol=0, atol=1e-6)
+        direct = prtsub.bake(self.vertices, self.faces, order=2, rays=32, fit="point")
+        self.assertEqual(ours.stats["bounces"], 2)
+        self.assertGreater(ours.transfer[:, 0].sum(), direct.transfer[:, 0].sum())
+
     def test_errors_are_the_tools_one_line_messages(self):
         with open(self.path("bad.obj"), "w") as f:
             f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")

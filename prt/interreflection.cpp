@@ -1,0 +1,161 @@
+// Interreflection by the standard recursion. The light leaving a diffuse point h towards p is
+// (ρ/π) Σ_i l_i t_i(h), so p receives, through every direction the mesh blocks, the transfer of
+// the point it sees: a bounce adds (ρ/π) ∫ (1 − V) t(h) max(n·ω, 0) dω to p's transfer, and the
+// asset's relighting rule, radiance = ρ/π Σ l_i t_i, stays what it is. Each pass bounces only the
+// previous pass's addition, so the passes are the terms of the Neumann series and their sum is
+// the light after that many bounces; each is at most ρ times the last where the mesh encloses p,
+// so the series converges geometrically.
+//
+// Directions are cosine-distributed (pdf cos/π), so each pass's estimate is (ρ/R) times the sum of
+// t_{k−1} over the rays that hit a front face. They come from a rank-1 lattice shifted per vertex
+// (the vertex's own stream of a seed of their own, independent of the direct transfer's rays) and
+// are the same in every pass, which is what lets the hits be kept: a hit is the face and its two
+// barycentrics, 12 bytes, so R = 256 rays cost 3 KiB a vertex. Without the cache every pass
+// traces the same rays again and finds the same hits.
+#include "prtsub/prt/interreflection.h"
+
+#include <cmath>
+#include <limits>
+
+#include "prtsub/prt/evaluate.h"
+#include "prtsub/prt/parallel.h"
+#include "prtsub/prt/sampling.h"
+#include "prtsub/prt/vertex_top_up.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/random.h"
+#include "prtsub/subdiv/stopwatch.h"
+
+namespace prtsub {
+
+BounceCache parse_bounce_cache(const std::string& name) {
+  if (name == "auto") return BounceCache::Auto;
+  if (name == "on") return BounceCache::On;
+  if (name == "off") return BounceCache::Off;
+  throw InputError("unknown bounce cache '" + name + "' (auto, on, off)");
+}
+
+const char* bounce_cache_name(BounceCache c) { return c == BounceCache::Auto ? "auto" : c == BounceCache::On ? "on" : "off"; }
+
+namespace {
+
+struct Hit {
+  int32_t face;  // -1: escaped, or a back face (contributes nothing)
+  float u, v;
+};
+
+constexpr uint64_t kBounceSeed = 0xB0B0CE5EEDull;
+
+// The R hits of vertex i, in ray order.
+void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<Eigen::Vector3d>& face_normal,
+                  const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
+  Eigen::Vector3d n = mesh.normals.row(i).transpose(), t, b;
+  tangent_frame(n, t, b);
+  const Eigen::Vector3f local = scene.to_local(mesh.point(i));
+  const Eigen::Vector3d away = offsets.row(i).transpose();
+  const Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
+  Rng rng(mix64(seed ^ kBounceSeed), i);
+  const double shift[2] = {rng.uniform(), rng.uniform()};
+  // The vertex's rays go to Embree as one stream (rtcIntersect1M): they share an origin.
+  thread_local std::vector<RTCRayHit> rays;
+  thread_local std::vector<Eigen::Vector3d> dirs;
+  rays.resize(R), dirs.resize(R);
+  for (uint32_t k = 0; k < R; ++k) {
+    const Eigen::Vector2d uv = doubling_lattice_point(k, R, generators);
+    const double u = uv.x() + shift[0], v = uv.y() + shift[1];
+    const Eigen::Vector3d d = cosine_direction(u - std::floor(u), v - std::floor(v));
+    dirs[k] = (d.x() * t + d.y() * b + d.z() * n).normalized();
+    init_occlusion_ray(rays[k].ray, origin, dirs[k].cast<float>());
+    rays[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rays[k].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcIntersect1M(scene.handle(), &context, rays.data(), R, sizeof(RTCRayHit));
+  for (uint32_t k = 0; k < R; ++k) {
+    const RTCHit& hit = rays[k].hit;
+    Hit& h = out[k];
+    h.face = -1, h.u = h.v = 0;
+    if (hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+    if (dirs[k].dot(face_normal[hit.primID]) >= 0) continue;  // the triangle's back: black
+    h.face = static_cast<int32_t>(hit.primID), h.u = hit.u, h.v = hit.v;
+  }
+}
+
+}  // namespace
+
+RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& o,
+                                    BounceStats* stats) {
+  if (o.bounces < 0 || o.bounces > 64) throw InputError("bounces must be between 0 and 64, got " + std::to_string(o.bounces));
+  if (!(o.albedo >= 0 && o.albedo <= 1)) throw InputError("albedo must be between 0 and 1, got " + std::to_string(o.albedo));
+  if (o.rays < 1 || o.rays > (1 << 16)) throw InputError("bounce rays per vertex must be between 1 and 65536, got " + std::to_string(o.rays));
+  const size_t V = mesh.num_vertices();
+  if (static_cast<size_t>(direct.rows()) != V) throw InputError("interreflection: the direct transfer has the wrong number of rows");
+  Stopwatch clock;
+  BounceStats s;
+  RowMatrixXd total = direct;
+  if (o.bounces == 0 || V == 0) {
+    if (stats) *stats = s;
+    return total;
+  }
+  const auto R = static_cast<uint32_t>(o.rays);
+  const std::vector<uint32_t> generators = doubling_generators(R, 0);
+  const RowMatrixX3d offsets = vertex_offset_directions(mesh);
+  std::vector<Eigen::Vector3d> face_normal(mesh.num_faces());
+  for (size_t f = 0; f < mesh.num_faces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    face_normal[f] = (mesh.point(t[1]) - mesh.point(t[0])).cross(mesh.point(t[2]) - mesh.point(t[0]));
+  }
+  const double cache_mib = double(V) * R * sizeof(Hit) / (1024.0 * 1024.0);
+  s.cached = o.cache == BounceCache::On || (o.cache == BounceCache::Auto && cache_mib <= o.cache_limit_mib);
+  s.cache_mib = s.cached ? cache_mib : 0;
+  std::vector<Hit> cache(s.cached ? V * R : 0);
+  if (s.cached) {
+    parallel_range<size_t>(V, o.threads, 16, [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i)
+        trace_vertex(mesh, scene, offsets, face_normal, generators, R, o.seed, static_cast<uint32_t>(i), &cache[i * R]);
+    });
+    scene.check("tracing bounce rays");
+    s.rays += uint64_t(V) * R;
+  }
+
+  const std::vector<double> area = vertex_areas(mesh);
+  double area_total = 0;
+  for (double a : area) area_total += a;
+  const double unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(static_cast<double>(direct.cols())))));
+  const Eigen::Index K = direct.cols();
+  RowMatrixXd previous = direct, next(direct.rows(), K);
+  const int max_passes = o.until_converged ? std::max(o.bounces, 1) : o.bounces;
+  for (int pass = 1; pass <= max_passes; ++pass) {
+    parallel_range<size_t>(V, o.threads, 16, [&](const tbb::blocked_range<size_t>& range) {
+      std::vector<Hit> own(s.cached ? 0 : R);
+      Eigen::RowVectorXd sum(K);
+      for (size_t i = range.begin(); i != range.end(); ++i) {
+        const Hit* hits = s.cached ? &cache[i * R] : own.data();
+        if (!s.cached) trace_vertex(mesh, scene, offsets, face_normal, generators, R, o.seed, static_cast<uint32_t>(i), own.data());
+        sum.setZero();
+        for (uint32_t k = 0; k < R; ++k) {
+          const Hit& h = hits[k];
+          if (h.face < 0) continue;
+          const Triangle& t = mesh.triangles[static_cast<size_t>(h.face)];
+          const double w1 = h.u, w2 = h.v, w0 = 1.0 - w1 - w2;
+          sum += w0 * previous.row(t[0]) + w1 * previous.row(t[1]) + w2 * previous.row(t[2]);
+        }
+        next.row(static_cast<Eigen::Index>(i)) = (o.albedo / R) * sum;
+      }
+    });
+    if (!s.cached) scene.check("tracing bounce rays"), s.rays += uint64_t(V) * R;
+    total += next;
+    double change2 = 0;
+    for (size_t i = 0; i < V; ++i) change2 += area[i] * next.row(static_cast<Eigen::Index>(i)).squaredNorm();
+    s.change_percent.push_back(100 * std::sqrt(change2 / std::max(area_total, 1e-300)) / unit);
+    s.passes = pass;
+    std::swap(previous, next);
+    if (o.until_converged && s.change_percent.back() < o.noise_percent) break;
+  }
+  if (!total.allFinite()) throw InputError("interreflection: the transfer became non-finite");
+  s.seconds = clock.total();
+  if (stats) *stats = s;
+  return total;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,57 @@
+// Interreflected transfer: light that bounces between the mesh's own surfaces (Sloan, Kautz and
+// Snyder 2002), added to the direct (shadowed) transfer pass by pass. docs/sh_convention.md,
+// "Interreflection", is the contract.
+#pragma once
+
+#include <vector>
+
+#include "prtsub/prt/ray_scene.h"
+#include "prtsub/prt/transfer.h"
+#include "prtsub/subdiv/mesh.h"
+
+namespace prtsub {
+
+enum class BounceCache { Auto, On, Off };
+BounceCache parse_bounce_cache(const std::string& name);  //!< auto, on, off \throw InputError
+const char* bounce_cache_name(BounceCache c);
+
+struct BounceOptions {
+  //! Passes of interreflection; 0 is direct transfer only. With `until_converged`, the most.
+  int bounces = 0;
+  //! Stop after the first pass whose change (the RMS over the surface of ‖Δt‖, in eval's unit) is
+  //! below `noise_percent`, the bake's own noise ("--bounces auto")
+  bool until_converged = false;
+  double noise_percent = 0;
+  double albedo = 0.8;  //!< the diffuse albedo of every surface, in [0, 1]
+  int rays = 256;       //!< rays per vertex and pass
+  uint64_t seed = 0;
+  int threads = 0;
+  //! Keep each ray's hit (12 bytes) between passes, or trace it again each pass; Auto keeps
+  //! them while they fit in `cache_limit_mib`. The results are the same either way.
+  BounceCache cache = BounceCache::Auto;
+  double cache_limit_mib = 1024;
+};
+
+struct BounceStats {
+  int passes = 0;
+  std::vector<double> change_percent;  //!< per pass: RMS over the surface of what it added
+  uint64_t rays = 0;                   //!< traced (once with the cache, every pass without)
+  bool cached = false;
+  double cache_mib = 0;
+  double seconds = 0;
+};
+
+//! The direct transfer plus `bounces` passes of interreflection. Pass k adds, at every render
+//! vertex p, (albedo/π) ∫ (1 − V(p, ω)) t_{k−1}(h(p, ω)) max(n·ω, 0) dω, where h is the first
+//! surface hit along ω and t_{k−1}(h) is the previous pass's addition (the direct transfer for
+//! k = 1) interpolated barycentrically in the hit triangle, from its own corners (so from the
+//! side of a crease that faces the ray). A ray that hits a triangle's back contributes nothing:
+//! a back face is taken as black. R cosine-weighted directions per vertex (a shifted lattice,
+//! seeded per vertex, the same every pass) estimate the integral as (albedo/R) Σ_hits t_{k−1}(h).
+//! The result does not depend on the thread count or on the cache.
+//! \param direct #V by N², the vertices' direct transfer (the asset's values)
+//! \throw InputError for options out of range, EmbreeError
+RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& options,
+                                    BounceStats* stats = nullptr);
+
+}  // namespace prtsub

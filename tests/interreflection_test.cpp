@@ -1,0 +1,130 @@
+// Interreflection against closed forms: a white furnace (albedo 1, constant light, a bowl whose
+// rays only ever hit its inside) converges to the light's own radiance, geometrically; a closed
+// room lit by nothing stays black; back faces are black; and the result is the same for any
+// thread count and with or without the hit cache.
+#include "prtsub/prt/interreflection.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "helpers.h"
+#include "prtsub/prt/bake.h"
+#include "prtsub/prt/sh.h"
+#include "prtsub/subdiv/exceptions.h"
+
+namespace prtsub {
+namespace {
+
+// The lower half of a subdivided icosphere, wound so its normals face the centre: a bowl open
+// upwards. From inside it a ray either leaves through the opening or hits the inside.
+Mesh bowl() {
+  const RawMesh sphere = test::icosphere(3);
+  RawMesh m;
+  m.positions = sphere.positions;
+  m.face_offsets.push_back(0);
+  for (size_t f = 0; f + 1 < sphere.face_offsets.size(); ++f) {
+    const int64_t* c = &sphere.face_indices[sphere.face_offsets[f]];
+    double z = 0;
+    for (int k = 0; k < 3; ++k) z += sphere.positions(c[k], 2) / 3;
+    if (z > 0.02) continue;
+    m.face_indices.insert(m.face_indices.end(), {c[0], c[2], c[1]});  // reversed: facing inwards
+    m.face_offsets.push_back(m.face_indices.size());
+  }
+  return test::build(m);
+}
+
+double mean_t0_error(const Mesh& mesh, const RowMatrixXd& t) {
+  const double want = std::sqrt(M_PI) / 2;  // t0 of an unoccluded point: radiance 1 under light 1 at albedo 1
+  double e = 0;
+  for (Eigen::Index v = 0; v < t.rows(); ++v) e += std::abs(t(v, 0) - want);
+  return e / static_cast<double>(mesh.num_vertices());
+}
+
+TEST(Interreflection, AWhiteFurnaceConvergesGeometricallyToTheLightsRadiance) {
+  const Mesh mesh = bowl();
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  TransferOptions t;
+  t.order = 2, t.rays = 1024;
+  const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t);
+  std::vector<double> error;
+  for (int k = 0; k <= 8; ++k) {
+    BounceOptions b;
+    b.bounces = k, b.albedo = 1, b.rays = 1024;
+    error.push_back(mean_t0_error(mesh, interreflected_transfer(mesh, scene, direct, b)));
+  }
+  // A bowl that is half a sphere blocks about half of each point's cosine-weighted rays, so each
+  // bounce takes about that share of what is left: the errors fall by a steady ratio below 1.
+  for (int k = 1; k <= 4; ++k) {
+    const double ratio = error[static_cast<size_t>(k)] / error[static_cast<size_t>(k - 1)];
+    EXPECT_GT(ratio, 0.3) << k;
+    EXPECT_LT(ratio, 0.7) << k;
+  }
+  EXPECT_GT(error[0], 0.25);   // direct light alone: far from the furnace's answer
+  EXPECT_LT(error[8], 0.012);  // eight bounces: within the rays' noise of it (1024 rays, 1% of t0)
+}
+
+TEST(Interreflection, AClosedRoomLitByNothingStaysBlackAfterAnyBounces) {
+  // The unit cube wound inwards: a room with no opening. Every ray is blocked, so the direct
+  // transfer is the estimator's zero, and bouncing zero gives zero at any albedo.
+  RawMesh room = test::cube();
+  for (size_t f = 0; f + 1 < room.face_offsets.size(); ++f) std::swap(room.face_indices[room.face_offsets[f] + 1], room.face_indices[room.face_offsets[f] + 2]);
+  const Mesh mesh = test::build(room, 0);
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  TransferOptions t;
+  t.order = 3, t.rays = 64;
+  const RowMatrixX3d offsets = vertex_offset_directions(mesh);  // as bake starts its rays: into the corners
+  const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t, nullptr, {}, &offsets);
+  const double direct_max = direct.cwiseAbs().maxCoeff();
+  for (double albedo : {0.0, 0.5, 1.0})
+    for (int bounces : {1, 4, 16}) {
+      BounceOptions b;
+      b.bounces = bounces, b.albedo = albedo, b.rays = 64;
+      const RowMatrixXd total = interreflected_transfer(mesh, scene, direct, b);
+      EXPECT_EQ(total.cwiseAbs().maxCoeff(), 0.0) << albedo << " " << bounces;
+    }
+  EXPECT_EQ(direct_max, 0.0) << "every ray of a closed room is blocked";
+}
+
+TEST(Interreflection, BackFacesAreBlack) {
+  // A ground, and a plate above it: facing down, the ground sees its front and receives its
+  // light; facing up, the ground sees its back and receives nothing.
+  for (const bool plate_up : {true, false}) {
+    const Mesh mesh = test::build(test::merge(test::quad(2.0, 0.0, true), test::quad(1.0, 0.5, plate_up)));
+    const RayScene scene(mesh.positions, position_triangles(mesh));
+    TransferOptions t;
+    t.order = 2, t.rays = 128;
+    const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t);
+    BounceOptions b;
+    b.bounces = 1, b.albedo = 0.8, b.rays = 128;
+    const RowMatrixXd added = interreflected_transfer(mesh, scene, direct, b) - direct;
+    double ground = 0;
+    for (size_t v = 0; v < mesh.num_vertices(); ++v)
+      if (std::abs(mesh.point(static_cast<uint32_t>(v)).z()) < 1e-9) ground += added.row(static_cast<Eigen::Index>(v)).cwiseAbs().sum();
+    if (plate_up) EXPECT_EQ(ground, 0.0);
+    else EXPECT_GT(ground, 0.0);
+  }
+}
+
+TEST(Interreflection, IsTheSameForAnyThreadCountWithOrWithoutTheCache) {
+  const Mesh mesh = test::build(test::merge(test::icosphere(1), test::quad(2.5, -1.0, true)));
+  BakeOptions o;
+  o.transfer.rays = 32, o.transfer.threads = 1, o.fit.method = FitMethod::Point;
+  o.bounce.bounces = 3, o.bounce.cache = BounceCache::On;
+  const BakeResult one = bake(mesh, o);
+  o.transfer.threads = 2, o.bounce.cache = BounceCache::Off;
+  const BakeResult two = bake(mesh, o);
+  EXPECT_TRUE(one.bounce.cached);
+  EXPECT_FALSE(two.bounce.cached);
+  EXPECT_EQ(one.bounce.rays * 3, two.bounce.rays) << "without the cache each pass traces again";
+  EXPECT_EQ((one.transfer - two.transfer).cwiseAbs().maxCoeff(), 0.0);
+  o.bounce.bounces = 0;
+  const BakeResult none = bake(mesh, o);
+  EXPECT_GT((one.transfer - none.transfer).col(0).minCoeff(), -1e-12) << "bounces only add light";
+  EXPECT_GT((one.transfer - none.transfer).col(0).maxCoeff(), 0.01);
+  o.signal = AssetSignal::Ao, o.bounce.bounces = 1;
+  EXPECT_THROW(bake(mesh, o), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub
