@@ -27,7 +27,6 @@
 #include "prtsub/prt/lights.h"
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/sh.h"
-#include "prtsub/prt/transfer.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/ply.h"
 #include "prtsub/subdiv/stopwatch.h"
@@ -273,13 +272,12 @@ std::string write_viewer(const CompareCli& c, const BakeOptions& base, const Ray
   if (it == keep.end()) return "";
   const BakeResult& r = it->second;
   const Asset asset = make_asset(r.mesh, r.transfer, r.metadata, base.signal);
-  const ErrorViewPoints points = error_view_points(asset);
   TransferOptions t = base.transfer;
-  t.order = asset.order, t.rays = c.frame_rays;
-  const RowMatrixXd reference = shadowed_transfer(source_scene, points.positions, points.normals, t);
+  t.rays = c.frame_rays;
+  const ErrorView error = trace_error_view(asset, source_scene, t);
   ViewerPageOptions o;
   o.name = c.bake.input + " (" + it->first + ", " + std::to_string(r.mesh.num_faces()) + " triangles)";
-  o.error_points = &points, o.reference = &reference, o.reference_rays = t.rays;
+  o.error = &error;
   const std::string page = viewer_page(asset, o);
   write_file_atomically(c.out_dir + "/viewer.html", page);
   return page;

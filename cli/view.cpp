@@ -10,7 +10,6 @@
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/output_file.h"
 #include "prtsub/prt/ray_scene.h"
-#include "prtsub/prt/transfer.h"
 #include "prtsub/subdiv/mesh_io.h"
 #include "prtsub/subdiv/stopwatch.h"
 
@@ -41,8 +40,7 @@ int cmd_view(int argc, char** argv) {
   const Asset asset = read_asset(input);
   ViewerPageOptions o;
   o.name = input;
-  RowMatrixXd reference;
-  ErrorViewPoints points;
+  ErrorView error;
   if (!source.empty()) {
     std::map<std::string, std::string> meta(asset.metadata.begin(), asset.metadata.end());
     const int asset_rays = meta.count("rays") ? std::atoi(meta["rays"].c_str()) : TransferOptions{}.rays;
@@ -50,10 +48,9 @@ int cmd_view(int argc, char** argv) {
     const Mesh src = load_mesh(source, LoadOptions{crease});
     const RayScene scene(src.positions, position_triangles(src));
     TransferOptions t;
-    t.order = asset.order, t.rays = rays > 0 ? rays : 8 * std::max(asset_rays, 1), t.seed = seed;
-    points = error_view_points(asset);
-    reference = shadowed_transfer(scene, points.positions, points.normals, t);
-    o.error_points = &points, o.reference = &reference, o.reference_rays = t.rays;
+    t.rays = rays > 0 ? rays : 8 * std::max(asset_rays, 1), t.seed = seed;
+    error = trace_error_view(asset, scene, t);
+    o.error = &error;
   }
   const std::string page = viewer_page(asset, o);
   write_file_atomically(output, page);
@@ -66,9 +63,9 @@ int cmd_view(int argc, char** argv) {
   r.set("triangles", asset.triangles.size());
   r.set("order", asset.order);
   r.set("bytes", page.size());
-  r.set("reference_rays", o.reference_rays);
-  r.set("reference_points", static_cast<int64_t>(points.positions.rows()));
-  r.set("reference_segments", points.segments);
+  r.set("reference_rays", error.rays);
+  r.set("reference_points", static_cast<int64_t>(error.positions.rows()));
+  r.set("reference_segments", error.segments);
   r.set("seconds_total", clock.total());
   r.print(stdout, {"prtsub view: {input} -> {output} ({bytes} bytes)", "  asset:      {triangles} triangles, {vertices} vertices, order {order}",
                    "  error view: {reference_points} points ({reference_segments} segments an edge), {reference_rays} rays each (0: none; --source adds it)"});

@@ -7,6 +7,7 @@
 #include "prtsub/prt/base64.h"
 #include "prtsub/prt/gltf.h"
 #include "prtsub/prt/lights.h"
+#include "prtsub/prt/transfer.h"
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
@@ -29,9 +30,9 @@ std::string packed(const Source* data, size_t n) {
 
 }  // namespace
 
-ErrorViewPoints error_view_points(const Asset& a, size_t target) {
+ErrorView trace_error_view(const Asset& a, const RayScene& source, TransferOptions options, size_t target) {
   const size_t F = a.triangles.size();
-  ErrorViewPoints p;
+  ErrorView p;
   while (p.segments < 8 && F * static_cast<size_t>((p.segments + 1) * (p.segments + 1)) <= target) ++p.segments;  // F·n² triangles
   const int n = p.segments, per = (n + 1) * (n + 2) / 2;
   p.positions.resize(static_cast<Eigen::Index>(F) * per, 3);
@@ -49,12 +50,15 @@ ErrorViewPoints error_view_points(const Asset& a, size_t target) {
         p.normals.row(r) = nrm.norm() > 0 ? Eigen::RowVector3d(nrm.normalized()) : Eigen::RowVector3d(a.normals.row(t[0]));
       }
   }
+  options.order = a.order;
+  p.reference = shadowed_transfer(source, p.positions, p.normals, options);
+  p.rays = options.rays;
   return p;
 }
 
 std::string viewer_data_json(const Asset& asset, const ViewerPageOptions& o) {
   const Eigen::Index K = asset.transfer.cols();
-  if (o.reference && (!o.error_points || o.reference->rows() != o.error_points->positions.rows() || o.reference->cols() != K))
+  if (o.error && (o.error->reference.rows() != o.error->positions.rows() || o.error->reference.cols() != K))
     throw InputError("viewer: the reference does not hold one row of " + std::to_string(K) + " values per error-view point");
   const std::string glb = gltf_asset_bytes("viewer.glb", asset_mesh(asset), asset.transfer, asset.metadata, asset.signal, {});
   std::string out = "{\"glb\":\"" + base64_encode(glb) + "\",\"name\":" + json_quote(o.name) + ",\"random_lights\":{";
@@ -69,17 +73,17 @@ std::string viewer_data_json(const Asset& asset, const ViewerPageOptions& o) {
     out += "]";
   }
   out += "},\"error\":";
-  if (o.reference) {
-    if (!o.reference->allFinite()) throw InputError("viewer: the reference holds NaN or Inf");
+  if (o.error) {
+    if (!o.error->reference.allFinite()) throw InputError("viewer: the reference holds NaN or Inf");
     // The page rebuilds the points and their triangles from the segment count (viewer/src/main.js
-    // errorGrid, the same order as error_view_points); only the reference travels.
-    const auto P = static_cast<size_t>(o.error_points->positions.rows());
-    out += "{\"segments\":" + std::to_string(o.error_points->segments) + ",\"reference\":" +
-           packed<float>(o.reference->data(), P * static_cast<size_t>(K)) + "}";
+    // errorGrid, the same order as trace_error_view).
+    const auto P = static_cast<size_t>(o.error->positions.rows());
+    out += "{\"segments\":" + std::to_string(o.error->segments) + ",\"reference\":" +
+           packed<float>(o.error->reference.data(), P * static_cast<size_t>(K)) + "}";
   } else {
     out += "null";
   }
-  out += ",\"reference_rays\":" + std::to_string(o.reference_rays) + "}";
+  out += ",\"reference_rays\":" + std::to_string(o.error ? o.error->rays : 0) + "}";
   return out;
 }
 

@@ -7,28 +7,30 @@
 #include <vector>
 
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/ray_scene.h"
+#include "prtsub/prt/transfer.h"
 
 namespace prtsub {
 
-//! Where the error view looks: points on a regular grid of barycentrics inside every asset
-//! triangle (n segments an edge), triangle by triangle, row i (weight i/n on the second
-//! corner) by column j (j/n on the third); the caller traces the reference at them, and the
-//! page rebuilds the same grid with the asset's transfer interpolated as a GPU interpolates it.
-struct ErrorViewPoints {
+//! The error view's data: points on a regular grid of barycentrics inside every asset triangle
+//! (n segments an edge), triangle by triangle, row i (weight i/n on the second corner) by column
+//! j (j/n on the third), with reference transfer traced there. The page rebuilds the same grid
+//! with the asset's transfer interpolated as a GPU interpolates it; only the reference travels.
+struct ErrorView {
   int segments = 1;
   RowMatrixX3d positions, normals;  //!< #P by 3 (normals interpolated and normalised)
+  RowMatrixXd reference;            //!< #P by the asset's coefficients
+  int rays = 0;
 };
 
-//! n = the largest of 1..8 with F·n² ≤ target_triangles (at least 1).
-ErrorViewPoints error_view_points(const Asset& asset, size_t target_triangles = 20000);
+//! The grid, n the largest of 1..8 with F·n² ≤ target_triangles (at least 1), and the reference
+//! traced at it on `source` (the mesh the asset was baked from) with `options` (its order is the
+//! asset's). 	hrow EmbreeError
+ErrorView trace_error_view(const Asset& asset, const RayScene& source, TransferOptions options, size_t target_triangles = 20000);
 
 struct ViewerPageOptions {
   std::string name;  //!< shown in the page's title and panel (escaped)
-  //! The error view's points and the reference transfer traced at them (#P by K); null leaves
-  //! that view off
-  const ErrorViewPoints* error_points = nullptr;
-  const RowMatrixXd* reference = nullptr;
-  int reference_rays = 0;
+  const ErrorView* error = nullptr;  //!< null leaves the error view off
   //! random lights the page offers (the library's generator, so they match `--light random:S`)
   std::vector<uint64_t> random_seeds = {1, 2, 3, 4, 5, 6, 7, 8};
 };

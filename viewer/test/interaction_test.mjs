@@ -5,10 +5,9 @@
 import { createHash } from 'node:crypto';
 import { resolve } from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { openPage } from './viewer_test.mjs';
+import { inBrowser } from './viewer_test.mjs';
 
-const { browser, page, problems } = await openPage(pathToFileURL(resolve(process.argv[2])).href + '?size=600,400', 800, 500);
-try {
+await inBrowser(pathToFileURL(resolve(process.argv[2])).href + '?size=600,400', 800, 500, async (page, problems) => {
   await page.waitForFunction(() => window.prtsubViewer && (window.prtsubViewer.ready || window.prtsubViewer.error), null, { timeout: 120000 });
   const canvas = page.locator('#view');
   const look = async () => ({
@@ -47,10 +46,4 @@ try {
     if (!ok) problems.push(`${what}: no redraw or no change`);
     before = after;
   }
-} catch (e) {
-  problems.push(`test: ${e.message}`);
-} finally {
-  await browser.close();
-}
-for (const p of problems) console.log('FAIL ' + p);
-process.exit(problems.length ? 1 : 0);
+});

@@ -4,11 +4,10 @@
 //   node test/report_test.mjs REPORT.html [SCREENSHOT.png]
 import { resolve } from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { openPage } from './viewer_test.mjs';
+import { inBrowser } from './viewer_test.mjs';
 
 const [reportPath, shotPath] = process.argv.slice(2);
-const { browser, page, problems } = await openPage(pathToFileURL(resolve(reportPath)).href, 1280, 900);
-try {
+await inBrowser(pathToFileURL(resolve(reportPath)).href, 1280, 900, async (page, problems) => {
   await page.waitForLoadState('load');
   const found = await page.evaluate(() => ({
     plots: [...document.querySelectorAll('svg')].filter((s) => s.querySelector('polyline, path, circle') && s.getBoundingClientRect().width > 100).length,
@@ -30,10 +29,4 @@ try {
     if (!status.webgl2 || status.error) problems.push(`embedded viewer: ${status.error || 'no WebGL2'}`);
   }
   if (shotPath) await page.screenshot({ path: shotPath, fullPage: true });
-} catch (e) {
-  problems.push(`test: ${e.message}`);
-} finally {
-  await browser.close();
-}
-for (const p of problems) console.log('FAIL ' + p);
-process.exit(problems.length ? 1 : 0);
+});

@@ -25,6 +25,21 @@ export async function openPage(url, width, height) {
   return { browser, page, problems };
 }
 
+// Opens `url` at width × height, runs `body(page, problems)`, closes the browser, prints each
+// problem (console and page errors included) and exits 1 if there was any.
+export async function inBrowser(url, width, height, body) {
+  const { browser, page, problems } = await openPage(url, width, height);
+  try {
+    await body(page, problems);
+  } catch (e) {
+    problems.push(`test: ${e.message}`);
+  } finally {
+    await browser.close();
+  }
+  for (const p of problems) console.log('FAIL ' + p);
+  process.exit(problems.length ? 1 : 0);
+}
+
 async function main() {
   const [pagePath, referencePath, query, minDb, shotPath] = process.argv.slice(2);
   if (!minDb) {
@@ -33,9 +48,7 @@ async function main() {
   }
   const [width, height] = new URLSearchParams(query).get('size').split(',').map(Number);
   const url = pathToFileURL(resolve(pagePath)).href + '?' + query;
-  const { browser, page, problems } = await openPage(url, width, height);
-  let failed = false;
-  try {
+  await inBrowser(url, width, height, async (page, problems) => {
     await page.waitForFunction(() => window.prtsubViewer && (window.prtsubViewer.ready || window.prtsubViewer.error), null, { timeout: 120000 });
     const status = await page.evaluate(() => window.prtsubViewer);
     const context = await page.evaluate(() => {
@@ -79,13 +92,7 @@ async function main() {
       if (far > 0.005 * both) problems.push(`${far} pixels differ by more than 8/255 (over 0.5% of ${both})`);
       if (result.psnr_agreeing_db < Number(minDb)) problems.push(`PSNR ${result.psnr_agreeing_db.toFixed(2)} dB over the agreeing pixels < ${minDb} dB`);
     }
-  } catch (e) {
-    problems.push(`test: ${e.message}`);
-  } finally {
-    await browser.close();
-  }
-  for (const p of problems) console.log('FAIL ' + p), (failed = true);
-  process.exit(failed ? 1 : 0);
+  });
 }
 
 if (import.meta.url === pathToFileURL(process.argv[1]).href) await main();
