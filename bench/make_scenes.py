@@ -2,7 +2,9 @@
 """Writes the generated scenes of the benchmarks into DIR: the two contact-shadow scenes of the
 refinement benchmark, spot_on_ground.obj (Spot's control mesh standing on a square ground quad)
 and icosphere_on_plane.obj (a level-1 icosphere resting on a two-triangle plane, as in the
-tests), and icosphere4.obj (a lone level-4 icosphere: smooth, unoccluded transfer for the fit).
+tests), icosphere4.obj (a lone level-4 icosphere: smooth, unoccluded transfer for the fit), and
+voxel_world.obj (a 96x96 heightmap of unit cubes, seeded, with only the exposed faces: columns
+that touch diagonally share edges of four faces, a voxel world's non-manifold edges).
 
 usage: make_scenes.py SHARED_SCENES_DIR OUT_DIR"""
 import math
@@ -81,6 +83,51 @@ def icosphere(levels=1):
     return v, [(a + 1, b + 1, c + 1) for a, b, c in f]
 
 
+def voxel_world(n=96, seed=7):
+    # A rolling terrain of heights 1..6 (sum of seeded waves) plus seeded bumps of 0..2, with
+    # seeded empty columns (a third), stepped into cubes: many columns touch only diagonally.
+    import random
+    rnd = random.Random(seed)
+    waves = [(rnd.uniform(0.03, 0.2), rnd.uniform(0.03, 0.2), rnd.uniform(0, 6.3)) for _ in range(6)]
+    heights = {}
+    for i in range(n):
+        for j in range(n):
+            h = sum(math.sin(a * i + b * j + c) for a, b, c in waves) / len(waves)
+            empty = rnd.random() < 1 / 3
+            bump = rnd.randint(0, 2)
+            heights[(i, j)] = 0 if empty else max(1, min(6, int(3.5 + 5 * h))) + bump
+    def height(i, j):
+        return heights.get((i, j), 0)
+    index, verts, faces = {}, [], []
+    def v(x, y, z):
+        if (x, y, z) not in index:
+            index[(x, y, z)] = len(verts) + 1
+            verts.append((float(x), float(z), -float(y)))  # y up (a rotation, so windings hold)
+        return index[(x, y, z)]
+    def quad(a, b, c, d):
+        faces.append((v(*a), v(*b), v(*c)))
+        faces.append((v(*a), v(*c), v(*d)))
+    for i in range(n):
+        for j in range(n):
+            h = height(i, j)
+            if h == 0:
+                continue
+            quad((i, j, h), (i + 1, j, h), (i + 1, j + 1, h), (i, j + 1, h))  # top (+z in grid)
+            quad((i, j, 0), (i, j + 1, 0), (i + 1, j + 1, 0), (i + 1, j, 0))  # bottom
+            for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                hn = height(i + di, j + dj)
+                for z in range(hn, h):  # exposed side cells
+                    if di == 1:  # each side counter-clockwise seen from outside
+                        quad((i + 1, j, z), (i + 1, j + 1, z), (i + 1, j + 1, z + 1), (i + 1, j, z + 1))
+                    elif di == -1:
+                        quad((i, j, z), (i, j, z + 1), (i, j + 1, z + 1), (i, j + 1, z))
+                    elif dj == 1:
+                        quad((i, j + 1, z), (i, j + 1, z + 1), (i + 1, j + 1, z + 1), (i + 1, j + 1, z))
+                    else:
+                        quad((i, j, z), (i + 1, j, z), (i + 1, j, z + 1), (i, j, z + 1))
+    return verts, faces
+
+
 def main():
     shared, out = sys.argv[1], sys.argv[2]
     os.makedirs(out, exist_ok=True)
@@ -95,6 +142,8 @@ def main():
     write_obj(os.path.join(out, "icosphere_on_plane.obj"), v, f, "level-1 icosphere resting on a two-triangle plane")
     v, f = icosphere(4)
     write_obj(os.path.join(out, "icosphere4.obj"), v, f, "level-4 icosphere, nothing else")
+    v, f = voxel_world()
+    write_obj(os.path.join(out, "voxel_world.obj"), v, f, "96x96 voxel heightmap, exposed faces only")
 
 
 if __name__ == "__main__":

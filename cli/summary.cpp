@@ -27,9 +27,13 @@ void record(Report& r, const RefineStats& st) {
   r.set("boundary_splits", st.boundary_splits);
   r.set("new_vertices", st.new_vertices);
   r.set("batches", st.batches);
+  r.set("non_manifold_edges", st.non_manifold_edges);
+  r.set("non_manifold_splits", st.non_manifold_splits);
   r.set("non_manifold_edges_kept", st.non_manifold_edges_kept);
   r.set("min_angle_before_deg", st.min_angle_before_deg);
   r.set("min_angle_after_deg", st.min_angle_after_deg);
+  r.set("faces_below_1deg_before", st.faces_below_1deg_before);
+  r.set("faces_below_1deg_after", st.faces_below_1deg_after);
   r.set("seconds_refine_rays", st.seconds_signal);
   r.set("seconds_refine_total", st.seconds_total);
   r.set("refine_overhead_fraction", st.seconds_total > 0 ? (st.seconds_total - st.seconds_signal) / st.seconds_total : 0.0);
@@ -198,8 +202,10 @@ void print_bake_summary(const Report& r) {
   if (adaptive)
     r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
                      "{pre_refinement_splits} pre-refinement) in {batches} batches",
-                     "              min angle {min_angle_before_deg:3}° before, {min_angle_after_deg:3}° after; "
-                     "{non_manifold_edges_kept} non-manifold edges never split",
+                     "              min angle {min_angle_before_deg:3}° before, {min_angle_after_deg:3}° after; faces "
+                     "below 1°: {faces_below_1deg_before} before, {faces_below_1deg_after} after",
+                     "              {non_manifold_edges} non-manifold edges, {non_manifold_splits} splits of one (in all "
+                     "their faces at once)",
                      "              {seconds_refine_total:3} s, of which {seconds_refine_rays:3} s tracing new vertices "
                      "(overhead {refine_overhead_fraction:%1})"});
   if (uniform) r.print(stdout, {"  refine:     uniform (OpenSubdiv, {scheme}), {levels} levels, {seconds_refine:3} s"});

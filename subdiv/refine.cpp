@@ -1,10 +1,13 @@
 // Budgeted adaptive refinement by longest-edge bisection.
 //
-// Topology is kept over positions: each face corner links to the corner of the same position
-// edge in the face across it, or marks the edge a boundary or non-manifold (more than two
-// faces; never split). Links tolerate faces that wind an edge the same way. Splitting an edge
-// inserts one position at its midpoint and splits every face on it, so the mesh is conforming
-// after every split: an interior edge adds two triangles, a boundary edge one. Each face
+// Topology is kept over positions: each face corner slot links to the next slot of the same
+// position edge in a ring around it (the face across, for a manifold edge; k faces in turn on a
+// non-manifold edge shared by k > 2), or marks the edge a boundary. Links tolerate faces that
+// wind an edge the same way. Splitting an edge inserts one position at its midpoint and splits
+// every face on it, so the mesh is conforming after every split: an edge of k faces adds k
+// triangles, a boundary edge one. Non-manifold edges are split like any other: left alone (as
+// refinement once did) they end up the longest edge of every face beside them, which are then
+// sliced along their shorter edges again and again (17% of a voxel world's faces fell below 1°). Each face
 // sees the edge through its own render vertices: faces across a smooth edge share their
 // corners and so share the new render vertex; across a crease each side gets its own at the
 // same position, interpolated from its own corners.
@@ -14,7 +17,11 @@
 // neighbour across the longest edge while that neighbour has a longer one, split the terminal
 // edge (the longest of both its faces), and repeat until the popped face itself is split.
 // Lengths are compared as (length, edge key), a total order, so every walk terminates, and
-// longest-edge bisection keeps every angle above half the smallest input angle.
+// longest-edge bisection keeps every angle above half the smallest input angle. On an edge of
+// k faces the edge is terminal only when it is the longest of all k. The one exception is a
+// face without area: its quality cannot be kept, so the walk does not enter it, and it is split
+// along whatever edge its neighbour needs (which keeps it from sending paths along a collinear
+// strip, and keeps it from seeding slivers in its neighbours).
 //
 // Work comes in batches: pop `batch` faces and split them with provisional values (linear
 // interpolation), then ask the signal for the new vertices' true values all at once (Embree
@@ -40,9 +47,10 @@ using Key = std::pair<double, double>;  // (error, area)
 
 inline uint64_t edge_key(uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
 
-// Per corner slot 3f + k (the edge from corner k to k + 1): the slot of the same edge in the
-// face across it, or one of these.
-constexpr uint32_t kBoundary = UINT32_MAX, kNonManifold = UINT32_MAX - 1;
+// Per corner slot 3f + k (the edge from corner k to k + 1): the next slot of the same edge in
+// its ring (the face across it, on a manifold edge), or one of these. kUnsplittable marks the
+// rare edge a face has twice (a face with a repeated position), which no split can keep valid.
+constexpr uint32_t kBoundary = UINT32_MAX, kUnsplittable = UINT32_MAX - 1;
 // A batch pops at most 1/kBatchShare of the current faces (and at most RefineOptions::batch).
 constexpr size_t kBatchShare = 16;
 
@@ -66,6 +74,7 @@ class Refiner {
   }
 
   size_t non_manifold_edges() const { return non_manifold_edges_; }
+  size_t unsplittable_edges() const { return unsplittable_edges_; }
   size_t faces() const { return tri_.size(); }
 
   // Everything grows with every split; sizing it for the budget once avoids repeated copies
@@ -105,11 +114,12 @@ class Refiner {
       for (size_t i = 0; i < n && tri_.size() < budget && !heap.empty(); ++i) {
         uint32_t t = heap.pop();
         if (!lepp(t, budget, stats)) {
-          // The split needs two triangles and one is left: end on a boundary split if any.
+          // The split needs more triangles than are left: end on smaller splits if any.
           heap.push(t, key_of(t));
-          if (!split_best_boundary(heap, stats)) {
-            stats.warning = "budget " + std::to_string(budget) + " is odd but no boundary edge is left to split (a closed "
-                            "surface has an even triangle count): stopped at " + std::to_string(tri_.size());
+          if (!finish_budget(budget, heap, stats)) {
+            stats.warning = "budget " + std::to_string(budget) + " cannot be met exactly: no split of " +
+                            std::to_string(budget - tri_.size()) + " triangle(s) is left (a closed surface has an even "
+                            "triangle count): stopped at " + std::to_string(tri_.size());
           }
           break;
         }
@@ -128,7 +138,7 @@ class Refiner {
     double e = 0;
     for (int k = 0; k < 3; ++k) {
       uint32_t a = tri_[f][k], b = tri_[f][(k + 1) % 3];
-      if (link_[3 * size_t(f) + size_t(k)] == kNonManifold) continue;  // never split: no say
+      if (link_[3 * size_t(f) + size_t(k)] == kUnsplittable) continue;  // never split: no say
       EdgeView v{pos_[vpos_[a]], pos_[vpos_[b]], nrm_[a], nrm_[b], &val_[size_t(a) * K_], &val_[size_t(b) * K_], K_};
       e += signal_.edge_error(v);
     }
@@ -184,37 +194,46 @@ class Refiner {
     return 0.5 * (pos_[pos_of(f, 1)] - pos_[pos_of(f, 0)]).cross(pos_[pos_of(f, 2)] - pos_[pos_of(f, 0)]).norm();
   }
 
-  // Pairs every corner slot with the slot of the same position edge in the other face on it:
-  // half-edges sorted by position edge, a run of two is a pair (in either winding), one is a
-  // boundary, three or more are non-manifold. Splits keep the links up to date, so refinement
-  // never looks an edge up by key (a hash lookup per step cost about a third of its time).
+  // Rings every corner slot with the slots of the same position edge in the other faces on it:
+  // half-edges grouped by position edge, a run of one is a boundary, two a pair (in either
+  // winding), more a ring in slot order. Splits keep the links up to date, so refinement never
+  // looks an edge up by key (a hash lookup per step cost about a third of its time).
   void link_faces() {
     const EdgeAdjacency adj = edge_adjacency(tri_, &vpos_);
     link_.assign(tri_.size() * 3, kBoundary);
     for (size_t e = 0; e < adj.num_edges(); ++e) {
       const uint32_t* h = adj.edge_begin(e);
-      if (adj.valence(e) == 2) {
-        link_[h[0]] = h[1];
-        link_[h[1]] = h[0];
-      } else if (adj.valence(e) > 2) {
-        ++non_manifold_edges_;
-        for (uint32_t i = 0; i < adj.valence(e); ++i) link_[h[i]] = kNonManifold;
-      }
+      const uint32_t n = adj.valence(e);
+      if (n < 2) continue;
+      bool twice = false;  // a face on its own edge twice
+      for (uint32_t i = 1; i < n; ++i) twice |= h[i] / 3 == h[i - 1] / 3;  // h is sorted
+      if (n > 2) ++non_manifold_edges_;
+      if (twice) ++unsplittable_edges_;
+      for (uint32_t i = 0; i < n; ++i) link_[h[i]] = twice ? kUnsplittable : h[(i + 1) % n];
     }
   }
-  void pair(uint32_t s, uint32_t t) {
-    link_[s] = t;
-    if (t < kNonManifold) link_[t] = s;
+  // Puts slot `to` in the place of slot `from` in from's ring (from is about to be reused).
+  void take_place(uint32_t from, uint32_t to) {
+    const uint32_t next = link_[from];
+    link_[to] = next;
+    if (next >= kUnsplittable) return;
+    uint32_t s = next;
+    while (link_[s] != from) s = link_[s];
+    link_[s] = to;
+  }
+  // Links slots that now share one edge into a ring (one: a boundary).
+  void ring(const uint32_t* slots, size_t n) {
+    for (size_t i = 0; i < n; ++i) link_[slots[i]] = n == 1 ? kBoundary : slots[(i + 1) % n];
   }
 
   // Corner k whose edge (k, k+1) is the face's longest splittable edge in the total order
-  // (length, key), or -1 when all three edges are non-manifold.
+  // (length, key), or -1 when none is splittable.
   int longest_edge(uint32_t f) const {
     int best = -1;
     double best_len = -1;
     uint64_t best_key = 0;
     for (int k = 0; k < 3; ++k) {
-      if (link_[3 * size_t(f) + size_t(k)] == kNonManifold) continue;
+      if (link_[3 * size_t(f) + size_t(k)] == kUnsplittable) continue;
       uint32_t a = pos_of(f, k), b = pos_of(f, k + 1);
       uint64_t key = edge_key(a, b);
       double len = (pos_[a] - pos_[b]).squaredNorm();
@@ -238,72 +257,86 @@ class Refiner {
       const uint32_t cur = path_.back();
       const int k = longest_edge(cur);
       if (k < 0) return true;  // nothing splittable in t (only t can lack a splittable edge)
-      const uint32_t across = link_[3 * size_t(cur) + size_t(k)];
-      const uint32_t other = across == kBoundary ? UINT32_MAX : across / 3;
-      if (across != kBoundary) {
-        const int k2 = longest_edge(other);
-        // A neighbour without area has no quality to keep: split the shared edge now rather
-        // than follow the path along a degenerate (collinear) strip, which only makes more.
-        if (area(other) > min_area_ && k2 != int(across % 3)) {
-          path_.push_back(other);  // the neighbour has a longer edge: refine there first
-          continue;
+      const uint32_t slot = 3 * cur + uint32_t(k);
+      // Every other face on the edge must have it as its longest too, or the path goes there.
+      uint32_t longer = UINT32_MAX;
+      size_t faces_on_edge = 1;
+      bool hit_t = cur == t;
+      if (link_[slot] != kBoundary) {
+        for (uint32_t s = link_[slot]; s != slot; s = link_[s], ++faces_on_edge) {
+          const uint32_t other = s / 3;
+          hit_t |= other == t;
+          // A neighbour without area has no quality to keep: split the shared edge now rather
+          // than follow the path along a degenerate (collinear) strip, which only makes more.
+          if (longer == UINT32_MAX && area(other) > min_area_ && longest_edge(other) != int(s % 3)) longer = other;
         }
       }
-      if (tri_.size() + (across == kBoundary ? 1 : 2) > budget) return false;
-      const bool hit_t = cur == t || other == t;
+      if (longer != UINT32_MAX) {
+        path_.push_back(longer);  // a neighbour has a longer edge: refine there first
+        continue;
+      }
+      if (tri_.size() + faces_on_edge > budget) return false;
       split(cur, k, stats);
       if (hit_t) return true;
       path_.pop_back();  // cur was split; its predecessor's longest edge still leads here
     }
   }
 
-  // With one triangle left in the budget: split the longest boundary edge of the highest-
-  // ranked face that has one.
-  bool split_best_boundary(IndexedHeap<Key>& heap, RefineStats& stats) {
-    uint32_t best = UINT32_MAX;
-    int best_corner = 0;
-    for (uint32_t f = 0; f < tri_.size(); ++f) {
-      if (!heap.contains(f)) continue;
-      double best_len = -1;
-      int corner = 0;
-      for (int k = 0; k < 3; ++k) {
-        if (link_[3 * size_t(f) + size_t(k)] != kBoundary) continue;
-        double len = (pos_[pos_of(f, k)] - pos_[pos_of(f, k + 1)]).squaredNorm();
-        if (len > best_len) best_len = len, corner = k;
+  // Ends the budget when the popped face's split needs more triangles than are left (one left
+  // on a closed surface; fewer than k left for an edge of k faces): while any split fits, splits
+  // the edge of the highest-ranked face that is terminal (the longest of every face on it, so
+  // the angle bound holds), and only if none is, any edge that fits (a boundary edge, say).
+  bool finish_budget(size_t budget, IndexedHeap<Key>& heap, RefineStats& stats) {
+    while (tri_.size() < budget) {
+      const size_t left = budget - tri_.size();
+      uint32_t best = UINT32_MAX;
+      int best_corner = 0;
+      bool best_terminal = false;
+      Key best_key{0, 0};
+      for (uint32_t f = 0; f < tri_.size(); ++f) {
+        // Faces split in this batch wait for their keys, and faces without area have none.
+        const Key key = heap.contains(f) ? heap.key(f) : Key{-1, 0};
+        const int longest = longest_edge(f);
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t slot = 3 * f + uint32_t(k);
+          if (link_[slot] == kUnsplittable) continue;
+          size_t n = 1;
+          bool terminal = k == longest;
+          if (link_[slot] != kBoundary)
+            for (uint32_t s = link_[slot]; s != slot && n <= left; s = link_[s], ++n)
+              terminal &= !(area(s / 3) > min_area_) || longest_edge(s / 3) == int(s % 3);
+          if (n > left) continue;
+          if (best == UINT32_MAX || terminal > best_terminal || (terminal == best_terminal && key > best_key))
+            best = f, best_corner = k, best_terminal = terminal, best_key = key;
+        }
       }
-      if (best_len < 0) continue;
-      if (best == UINT32_MAX || heap.key(f) > heap.key(best) || (!(heap.key(best) > heap.key(f)) && f < best))
-        best = f, best_corner = corner;
+      if (best == UINT32_MAX) return false;
+      split(best, best_corner, stats);
     }
-    if (best == UINT32_MAX) return false;
-    split(best, best_corner, stats);
     return true;
   }
 
-  // Splits the edge of face f0 from corner k0 to k0 + 1, in every face on it (one or two).
+  // Splits the edge of face f0 from corner k0 to k0 + 1, in every face on it (its ring).
   void split(uint32_t f0, int k0, RefineStats& stats) {
-    const uint32_t across = link_[3 * size_t(f0) + size_t(k0)];
-    struct Side {
-      uint32_t f, k, a_pos;  // face, corner, the position its edge starts at
-      uint32_t piece_a, piece_b;  // after the split: the slots of (a, m) and (m, b)
-    } side[2];
-    const int sides = across == kBoundary ? 1 : 2;
-    side[0] = {f0, uint32_t(k0), pos_of(f0, k0), 0, 0};
-    if (sides == 2) side[1] = {across / 3, across % 3, pos_of(across / 3, int(across % 3)), 0, 0};
+    const uint32_t s0 = 3 * f0 + uint32_t(k0);
+    ring_.assign(1, s0);
+    if (link_[s0] != kBoundary)
+      for (uint32_t s = link_[s0]; s != s0; s = link_[s]) ring_.push_back(s);
+    const uint32_t p = pos_of(f0, k0);  // the edge is (p, q)
     const uint32_t m = static_cast<uint32_t>(pos_.size());
-    pos_.push_back(0.5 * (pos_[pos_of(f0, k0)] + pos_[pos_of(f0, k0 + 1)]));
-    std::pair<uint64_t, uint32_t> made[2];  // (render pair, new render vertex) of this split
-    int n_made = 0;
-    for (int s = 0; s < sides; ++s) {
-      const uint32_t f = side[s].f, k = side[s].k, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    pos_.push_back(0.5 * (pos_[p] + pos_[pos_of(f0, k0 + 1)]));
+    made_.clear();  // (render pair, new render vertex) of this split
+    half_p_.clear(), half_q_.clear();
+    for (const uint32_t slot : ring_) {
+      const uint32_t f = slot / 3, k = slot % 3, k1 = (k + 1) % 3, k2 = (k + 2) % 3;
       const uint32_t a = tri_[f][k], b = tri_[f][k1], c = tri_[f][k2];
       const uint64_t pair_key = edge_key(a, b);
       uint32_t mv = UINT32_MAX;
-      for (int i = 0; i < n_made; ++i)
-        if (made[i].first == pair_key) mv = made[i].second;
+      for (const auto& [key, v] : made_)
+        if (key == pair_key) mv = v;
       if (mv == UINT32_MAX) {
         mv = new_vertex(m, a, b, f);
-        made[n_made++] = {pair_key, mv};
+        made_.emplace_back(pair_key, mv);
       }
       const uint32_t g = static_cast<uint32_t>(tri_.size());
       Triangle tf = tri_[f], tg;
@@ -313,25 +346,23 @@ class Refiner {
       tri_.push_back(tg);
       src_.push_back(src_[f]);
       // Links: g takes f's edge (b, c); (mv, c) joins f and g; (c, a) stays with f.
-      const uint32_t bc = link_[3 * size_t(f) + k1];
       link_.insert(link_.end(), {kBoundary, kBoundary, kBoundary});
-      pair(3 * g + k1, bc);
-      pair(3 * f + k1, 3 * g + k2);
-      side[s].piece_a = 3 * f + k, side[s].piece_b = 3 * g + k;
+      take_place(3 * f + k1, 3 * g + k1);
+      link_[3 * f + k1] = 3 * g + k2, link_[3 * g + k2] = 3 * f + k1;
+      // (a, mv) is slot 3f + k and (mv, b) slot 3g + k; sort them by the end they share.
+      const bool a_is_p = vpos_[a] == p;
+      half_p_.push_back(a_is_p ? 3 * f + k : 3 * g + k);
+      half_q_.push_back(a_is_p ? 3 * g + k : 3 * f + k);
       if (heap_) heap_->remove(f);
       if (f < extra_.size()) extra_[f] = 0;  // a probe speaks for the face it was taken in only
       dirty_.push_back(f);
       dirty_.push_back(g);
     }
-    if (sides == 1) {
-      link_[side[0].piece_a] = link_[side[0].piece_b] = kBoundary;
-    } else if (side[0].a_pos == side[1].a_pos) {  // the two faces wind the edge the same way
-      pair(side[0].piece_a, side[1].piece_a), pair(side[0].piece_b, side[1].piece_b);
-    } else {
-      pair(side[0].piece_a, side[1].piece_b), pair(side[0].piece_b, side[1].piece_a);
-    }
+    ring(half_p_.data(), half_p_.size());
+    ring(half_q_.data(), half_q_.size());
     ++stats.splits;
-    if (sides == 1) ++stats.boundary_splits;
+    if (ring_.size() == 1) ++stats.boundary_splits;
+    if (ring_.size() > 2) ++stats.non_manifold_splits;
   }
 
   uint32_t new_vertex(uint32_t position, uint32_t a, uint32_t b, uint32_t face) {
@@ -383,44 +414,68 @@ class Refiner {
   std::vector<double> val_, attr_;
   std::vector<Triangle> tri_;
   std::vector<uint32_t> link_;  // per corner slot: see kBoundary
-  size_t non_manifold_edges_ = 0;
+  size_t non_manifold_edges_ = 0, unsplittable_edges_ = 0;
   std::vector<NewVertex> pending_;
   std::vector<uint32_t> dirty_;
   std::vector<uint32_t> path_;
+  std::vector<uint32_t> ring_, half_p_, half_q_;  // split()'s scratch
+  std::vector<std::pair<uint64_t, uint32_t>> made_;
   IndexedHeap<Key>* heap_ = nullptr;
 };
 
 }  // namespace
 
-double min_angle_deg(const Mesh& mesh) {
-  double best = 180;
-  for (const Triangle& t : mesh.triangles) {
+std::vector<double> face_min_angles_deg(const Mesh& mesh) {
+  std::vector<double> out(mesh.triangles.size(), 0.0);
+  for (size_t f = 0; f < out.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
     Eigen::Vector3d p[3] = {mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2])};
     if (!((p[1] - p[0]).cross(p[2] - p[0]).norm() > 0)) continue;
+    double best = 180;
     for (int k = 0; k < 3; ++k) {
       Eigen::Vector3d a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
       best = std::min(best, std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0)) * 180 / M_PI);
     }
+    out[f] = best;
   }
+  return out;
+}
+
+double min_angle_deg(const Mesh& mesh) {
+  double best = 180;
+  for (double a : face_min_angles_deg(mesh))
+    if (a > 0) best = std::min(best, a);
   return best;
 }
+
+namespace {
+void angle_stats(const Mesh& mesh, double& min_deg, size_t& below_1deg) {
+  min_deg = 180, below_1deg = 0;
+  for (double a : face_min_angles_deg(mesh)) {
+    if (a > 0) min_deg = std::min(min_deg, a);
+    below_1deg += a < 1;
+  }
+}
+}  // namespace
 
 RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& signal, const RefineOptions& options,
                             RowMatrixXd* attributes) {
   const Stopwatch clock;
   RefineStats stats;
-  stats.min_angle_before_deg = min_angle_deg(mesh);
+  angle_stats(mesh, stats.min_angle_before_deg, stats.faces_below_1deg_before);
   if (options.budget <= mesh.num_faces()) {
     stats.warning = "budget " + std::to_string(options.budget) + " is not above the input's " +
                     std::to_string(mesh.num_faces()) + " triangles: mesh left as it is";
     stats.min_angle_after_deg = stats.min_angle_before_deg;
+    stats.faces_below_1deg_after = stats.faces_below_1deg_before;
     return stats;
   }
   if (mesh.has_uv() && static_cast<size_t>(mesh.uv.rows()) != mesh.num_vertices())
     throw InputError("refine: the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " +
                      std::to_string(mesh.num_vertices()) + " render vertices");
   Refiner r(mesh, values, attributes, signal);
-  stats.non_manifold_edges_kept = r.non_manifold_edges();
+  stats.non_manifold_edges = r.non_manifold_edges();
+  stats.non_manifold_edges_kept = r.unsplittable_edges();
   r.reserve(options.budget);
   const size_t batch = std::max<size_t>(options.batch, 1);
   if (options.max_edge > 0) {
@@ -432,7 +487,7 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
     r.run(options.budget, batch, [&](uint32_t f) { return r.error_key(f); }, stats);
   }
   r.write_back();
-  stats.min_angle_after_deg = min_angle_deg(mesh);
+  angle_stats(mesh, stats.min_angle_after_deg, stats.faces_below_1deg_after);
   stats.seconds_total = clock.total();
   return stats;
 }

@@ -68,8 +68,11 @@ struct RefineStats {
   size_t faces_popped = 0;  //!< faces taken from the queue
   size_t probed_faces = 0;  //!< faces the signal probed inside
   size_t walk_steps = 0;    //!< faces visited along longest-edge paths (linear in splits + pops)
-  size_t non_manifold_edges_kept = 0;  //!< never split
+  size_t non_manifold_edges = 0;       //!< input edges shared by more than two faces
+  size_t non_manifold_splits = 0;      //!< splits of such edges (all k faces at once)
+  size_t non_manifold_edges_kept = 0;  //!< never split: edges a face has twice (a repeated position)
   double min_angle_before_deg = 0, min_angle_after_deg = 0;
+  size_t faces_below_1deg_before = 0, faces_below_1deg_after = 0;  //!< counting faces without area
   double seconds_signal = 0, seconds_total = 0;
   std::string warning;  //!< non-empty when the budget could not be met exactly, and why
 };
@@ -80,8 +83,8 @@ struct RefineStats {
 //! stays conforming across creases, boundaries and welded parts, and angles never fall below
 //! half the smallest input angle. New vertices lie at edge midpoints; normals (per crease
 //! side) are interpolated and renormalised, the mesh's UVs and `attributes` (#V by A) interpolated
-//! linearly, and every face keeps its source_face. Non-manifold edges are never split.
-//! A budget at or below the input's count leaves the mesh as it is (with a warning). Closed
+//! linearly, and every face keeps its source_face. An edge shared by k > 2 faces is split in
+//! all k at once. A budget at or below the input's count leaves the mesh as it is (with a warning). Closed
 //! surfaces only hold even triangle counts (3F = 2E); an odd budget on one yields budget − 1.
 //! \param attributes may be null
 RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& signal, const RefineOptions& options,
@@ -89,5 +92,8 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
 
 //! Smallest corner angle over faces of non-zero area, in degrees.
 double min_angle_deg(const Mesh& mesh);
+
+//! Smallest corner angle of each face in degrees (0 for a face without area).
+std::vector<double> face_min_angles_deg(const Mesh& mesh);
 
 }  // namespace prtsub

@@ -70,6 +70,26 @@ RawMesh cube() {
   return m;
 }
 
+RawMesh checkerboard_voxels(int n) {
+  RawMesh m;
+  const int g = n + 1;  // grid points per axis
+  m.positions.resize(g * g * g, 3);
+  for (int i = 0; i < g * g * g; ++i) m.positions.row(i) << i % g, (i / g) % g, i / (g * g);
+  const RawMesh unit = cube();
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        if ((i + j + k) % 2) continue;
+        auto index = [&](int c) {  // the unit cube's corner c as a grid point
+          return (i + (c & 1)) + g * (j + ((c >> 1) & 1)) + g * g * (k + ((c >> 2) & 1));
+        };
+        for (size_t f = 0; f + 1 < unit.face_offsets.size(); ++f)
+          push_face(m, {index(int(unit.face_indices[unit.face_offsets[f]])), index(int(unit.face_indices[unit.face_offsets[f] + 1])),
+                        index(int(unit.face_indices[unit.face_offsets[f] + 2]))});
+      }
+  return m;
+}
+
 RawMesh quad(double half, double height, bool facing_up, double x0) {
   RawMesh m;
   const double lo = std::isnan(x0) ? -half : x0;

@@ -17,6 +17,10 @@ RawMesh quad(double half, double height, bool facing_up, double x0 = NAN);
 //! from (i, j) to (i+1, j+1)); interior points moved by up to ±jitter/2 cells (seeded), so that
 //! areas differ as on real meshes.
 RawMesh grid(int n, double jitter = 0, uint64_t seed = 3);
+//! Unit cubes at the cells (i, j, k) of an n×n×n grid with i + j + k even (a 3D checkerboard),
+//! 12 outward triangles each, corners shared: cubes that touch diagonally share an edge, which
+//! then has four faces (a voxel world's non-manifold edges).
+RawMesh checkerboard_voxels(int n);
 //! Concatenates meshes (no welding).
 RawMesh merge(const RawMesh& a, const RawMesh& b);
 //! Applies p -> scale * p + offset.

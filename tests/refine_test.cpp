@@ -198,7 +198,31 @@ TEST(Refine, UvSeamsRefinePerSideWithMidpointUvs) {
   }
 }
 
-TEST(Refine, NonManifoldEdgesAreNeverSplit) {
+// Position edges with their face counts.
+std::map<std::pair<uint32_t, uint32_t>, int> edge_valences(const Mesh& m) {
+  std::map<std::pair<uint32_t, uint32_t>, int> out;
+  for (const Triangle& t : m.triangles)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = m.vertex_position[t[k]], b = m.vertex_position[t[(k + 1) % 3]];
+      ++out[{std::min(a, b), std::max(a, b)}];
+    }
+  return out;
+}
+
+// Rivara's bound, as the issue states it: over output faces whose input face was not already
+// below 1°, the smallest angle is at least half the smallest such input angle.
+void expect_rivara_bound(const std::vector<double>& input_angles, const Mesh& out) {
+  double input_min = 180;
+  for (double a : input_angles)
+    if (a >= 1) input_min = std::min(input_min, a);
+  const std::vector<double> angles = face_min_angles_deg(out);
+  double out_min = 180;
+  for (size_t f = 0; f < angles.size(); ++f)
+    if (input_angles[out.source_face[f]] >= 1) out_min = std::min(out_min, angles[f]);
+  EXPECT_GE(out_min, 0.5 * input_min) << "input " << input_min << "°";
+}
+
+TEST(Refine, NonManifoldEdgesAreSplitInAllTheirFaces) {
   // Three triangles on the edge (0,0,0)-(1,0,0): a fin.
   RawMesh fin;
   fin.positions.resize(5, 3);
@@ -206,15 +230,65 @@ TEST(Refine, NonManifoldEdgesAreNeverSplit) {
   fin.face_indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
   fin.face_offsets = {0, 3, 6, 9};
   Mesh m = test::build(fin);
+  const double area = total_area(m);
   StepSignal s;
   s.x0 = 0.5;
   RowMatrixXd v = s.initial(m);
   RefineStats st = refine_adaptive(m, v, s, RefineOptions{40, 4, 0});
-  EXPECT_EQ(st.non_manifold_edges_kept, 1u);
-  EXPECT_EQ(position_edges(m).non_manifold, 1u);
-  for (Eigen::Index p = 0; p < m.positions.rows(); ++p)
-    EXPECT_GT((m.positions.row(p) - Eigen::RowVector3d(0.5, 0, 0)).norm(), 1e-12) << "the fin edge was split";
-  EXPECT_GT(m.num_faces(), 3u);
+  EXPECT_EQ(st.non_manifold_edges, 1u);
+  EXPECT_EQ(st.non_manifold_edges_kept, 0u);
+  EXPECT_GT(st.non_manifold_splits, 0u);
+  EXPECT_EQ(m.num_faces(), 40u);
+  EXPECT_NEAR(total_area(m), area, 1e-12 * area);
+  // Conforming: every edge on the fin's segment (y = z = 0) has all three faces, every other
+  // edge two, or one on the outline (each edge of the outline lies on an input boundary edge).
+  size_t on_fin = 0;
+  for (const auto& [e, n] : edge_valences(m)) {
+    const Eigen::Vector3d a = m.positions.row(e.first).transpose(), b = m.positions.row(e.second).transpose();
+    const bool fin_edge = std::abs(a.y()) + std::abs(a.z()) + std::abs(b.y()) + std::abs(b.z()) < 1e-15;
+    on_fin += fin_edge;
+    if (fin_edge) EXPECT_EQ(n, 3) << a.transpose() << " - " << b.transpose();
+    else EXPECT_LE(n, 2) << a.transpose() << " - " << b.transpose();
+  }
+  EXPECT_EQ(on_fin, st.non_manifold_splits + 1);  // each split of a fin edge makes one more
+}
+
+TEST(Refine, AVoxelCheckerboardKeepsRivarasBoundAtItsNonManifoldEdges) {
+  // 14 cubes, every pair of diagonal neighbours sharing an edge of four faces, refined to ten
+  // times its triangles where a step crosses the grid diagonally.
+  Mesh m = test::build(test::checkerboard_voxels(3), 30.0);
+  const size_t input_faces = m.num_faces();
+  ASSERT_EQ(input_faces, 14u * 12u);
+  const std::vector<double> input_angles = face_min_angles_deg(m);
+  const double area = total_area(m);
+  struct Diagonal : StepSignal {
+    double at(const Eigen::Vector3d& p) const { return 1 / (1 + std::exp(-(p.x() + 0.7 * p.y() - 0.4 * p.z() - 1.9) / 0.05)); }
+    void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd&, RowMatrixXd& values) override {
+      for (size_t i = 0; i < batch.size(); ++i) values(static_cast<Eigen::Index>(i), 0) = at(batch[i].position);
+    }
+  } s;
+  RowMatrixXd v(static_cast<Eigen::Index>(m.num_vertices()), 1);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = s.at(m.point(i));
+  const size_t input_nm = position_edges(m).non_manifold;
+  EXPECT_EQ(input_nm, 36u);  // 3 axes x 12 edges where two cubes of the 3x3x3 checkerboard meet
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{10 * input_faces, 16, 0});
+  EXPECT_TRUE(st.warning.empty()) << st.warning;
+  EXPECT_EQ(m.num_faces(), 10 * input_faces);
+  EXPECT_EQ(st.non_manifold_edges, input_nm);
+  EXPECT_GT(st.non_manifold_splits, 0u);
+  EXPECT_NEAR(total_area(m), area, 1e-12 * area);
+  expect_rivara_bound(input_angles, m);
+  EXPECT_EQ(st.faces_below_1deg_after, 0u);
+  // Conforming: every edge has two or four faces (no T-junction opens a boundary), and as many
+  // four-face edges as splits of them added.
+  size_t four = 0;
+  for (const auto& [e, n] : edge_valences(m)) {
+    EXPECT_TRUE(n == 2 || n == 4) << n;
+    four += n == 4;
+  }
+  EXPECT_EQ(four, input_nm + st.non_manifold_splits);
+  // Right isosceles triangles bisected on their hypotenuses stay right isosceles.
+  EXPECT_NEAR(st.min_angle_after_deg, 45.0, 1e-9);
 }
 
 TEST(Refine, SliversDegenerateFacesAndAllCreaseTrianglesAreHandled) {
@@ -229,8 +303,11 @@ TEST(Refine, SliversDegenerateFacesAndAllCreaseTrianglesAreHandled) {
   StepSignal s;
   s.x0 = 0.7;
   RowMatrixXd v = s.initial(m);
+  const std::vector<double> input_angles = face_min_angles_deg(m);
   RefineStats st = refine_adaptive(m, v, s, RefineOptions{60, 4, 0});
   EXPECT_EQ(m.num_faces(), 60u);
+  expect_rivara_bound(input_angles, m);  // neither the sliver nor the zero-area face seeds slivers
+  EXPECT_EQ(st.faces_below_1deg_before, 2u);
   EXPECT_TRUE(v.allFinite());
   EXPECT_TRUE(m.normals.allFinite());
   EXPECT_GE(st.min_angle_after_deg, 0.5 * st.min_angle_before_deg);
