@@ -306,7 +306,8 @@ int cmd_eval(int argc, char** argv) {
   ArgParser args("eval",
                  "Surface RMS transfer error of an asset, as a percentage of ||t_unshadowed||, at seeded area-\n"
                  "stratified points on its source surface against a reference with many more rays. Each point is\n"
-                 "located in the asset through source_face, so any refinement can be judged on the same points.");
+                 "located in the asset through source_face, so any refinement can be judged on the same points;\n"
+                 "in a simplified asset (whose faces no longer lie in the source's), at its closest point.");
   args.positional("ASSET", "an asset written by prtsub bake (.ply, .glb or .gltf; transfer or ao)", &input);
   args.option("--source", "INPUT", "the mesh the asset was baked from (required)", &source);
   args.option("--points", "N", "reference points", &ro.points, size_t(1), size_t(10000000));
@@ -328,9 +329,13 @@ int cmd_eval(int argc, char** argv) {
   const RayScene scene(src.positions, position_triangles(src));
   const Reference ref = make_reference(src, scene, ro);
   const double t_ref = clock.lap();
-  const EvalResult e = evaluate(ref, asset.positions, asset.triangles, asset.source_face, asset.transfer);
+  // A simplified asset's faces do not lie in the source's: locate by closest point.
+  const bool closest = meta.count("simplified") > 0;
+  const EvalResult e = closest ? evaluate_by_closest_point(ref, asset.positions, asset.triangles, asset.transfer, ro.threads)
+                               : evaluate(ref, asset.positions, asset.triangles, asset.source_face, asset.transfer);
   Report r;
   r.set("command", "eval");
+  r.set("location", closest ? "closest point (a simplified asset)" : "source_face");
   r.set("input", input);
   r.set("source", source);
   r.set("triangles", asset.triangles.size());
@@ -345,7 +350,7 @@ int cmd_eval(int argc, char** argv) {
   r.set("seconds_reference", t_ref);
   r.print(stdout, {"prtsub eval: {input} against {source}", "  asset:      {triangles} triangles, order {order}, {asset_rays} rays per vertex",
                    "  reference:  {reference_points} points, {reference_rays} rays each ({seconds_reference:2} s); its own noise "
-                   "floor {noise_floor_percent:3}%",
+                   "floor {noise_floor_percent:3}%; located by {location}",
                    "  error:      RMS {rms_percent:3}%, 95th percentile {p95_percent:3}% of ||t_unshadowed||"});
   if (e.unlocated) r.print(stdout, {"  warning:    {unlocated_points} reference points had no face in the asset"});
   if (!report.empty()) r.write(report);

@@ -86,7 +86,14 @@ void BakeCli::add_fit(ArgParser& args) {
 void BakeCli::add_refinement(ArgParser& args) {
   args.choice("--refine", "refinement", &bake.refine, {Refinement::None, Refinement::Adaptive, Refinement::Uniform},
               refinement_name);
-  args.option("--budget", "T", "adaptive: output triangle count (required)", &bake.adaptive.budget, size_t(0), size_t(1) << 30);
+  args.option("--budget", "T", "adaptive: output triangle count (required); below the input's, the mesh is simplified",
+              &bake.adaptive.budget, size_t(0), size_t(1) << 30);
+  args.choice("--simplify-metric", "adaptive below the input: rank collapses by the transfer's change and the geometry, or the "
+              "geometry alone", &bake.simplify.metric, {SimplifyMetric::Transfer, SimplifyMetric::Geometry}, simplify_metric_name);
+  args.option("--min-angle", "A", "adaptive below the input: no collapse makes a face with an angle below A degrees",
+              &bake.simplify.min_angle_deg, 0.0, 59.0);
+  args.option("--simplify-alpha", "A", "adaptive below the input: the fit's regulariser weight there (--alpha is the others')",
+              &bake.simplified_alpha, 0.0, 1e12);
   args.choice("--estimate", "adaptive: edge error estimate", &bake.estimate,
               {EdgeEstimate::Relative, EdgeEstimate::Shadow, EdgeEstimate::Curvature, EdgeEstimate::Length, EdgeEstimate::Probe,
                EdgeEstimate::Root},

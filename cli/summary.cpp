@@ -140,7 +140,20 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("estimate", estimate_name(o.estimate));
     r.set("batch", o.adaptive.batch);
     r.set("max_edge", o.adaptive.max_edge);
-    record(r, res.refine);
+    r.set("simplified", res.simplified);
+    if (res.simplified) {
+      const SimplifyStats& st = res.simplify;
+      r.set("simplify_metric", simplify_metric_name(o.simplify.metric));
+      r.set("simplify_min_angle_deg", o.simplify.min_angle_deg);
+      r.set("collapses", st.collapses);
+      r.set("locked_vertices", st.locked_vertices);
+      r.set("kept_faces", st.kept_faces);
+      r.set("min_angle_after_deg", st.min_angle_after_deg);
+      r.set("faces_below_min_angle", st.faces_below_min_angle);
+      r.set("seconds_simplify", st.seconds);
+    } else {
+      record(r, res.refine);
+    }
   }
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
@@ -157,6 +170,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("seconds_bounce", res.seconds_bounce);
   }
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
+  if (res.simplified && res.simplify.collapses > 0) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
   record_ray_spread(r, res.vertex_rays, o.transfer.rays);
   if (o.target_error > 0) {
@@ -199,7 +213,12 @@ void print_bake_summary(const Report& r) {
            "              {defects_invalid_file_normals} invalid file normals, {defects_corners_without_uv} corners without UVs (0, 0)",
            "  topology:   {boundary_edges} boundary edges, {welded_vertices} vertices welded, {polygons_triangulated} polygons "
            "triangulated"});
-  if (adaptive)
+  if (adaptive && r.format("{simplified}") == "yes")
+    r.print(stdout, {"  simplify:   to the budget, metric {simplify_metric}: {collapses} half-edge collapses (OpenMesh's Decimater), "
+                     "{locked_vertices} vertices locked (crease corners and ends), {kept_faces} faces kept as they were",
+                     "              min angle {min_angle_after_deg:3}° after ({faces_below_min_angle} faces below "
+                     "{simplify_min_angle_deg:1}°, none made by a collapse); {seconds_simplify:3} s"});
+  else if (adaptive)
     r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
                      "{pre_refinement_splits} pre-refinement) in {batches} batches",
                      "              min angle {min_angle_before_deg:3}° before, {min_angle_after_deg:3}° after; faces "

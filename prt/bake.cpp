@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "prtsub/prt/closest_point.h"
 #include "prtsub/prt/evaluate.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/subdiv/random.h"
@@ -53,6 +54,8 @@ void check_bake_options(const BakeOptions& o) {
     throw InputError("--error must be a finite, non-negative percentage, got " + std::to_string(o.target_error));
   if (!(o.fit.alpha >= 0) || !std::isfinite(o.fit.alpha))
     throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.fit.alpha));
+  if (!(o.simplified_alpha >= 0) || !std::isfinite(o.simplified_alpha))
+    throw InputError("fit: the simplified mesh's alpha must be finite and non-negative, got " + std::to_string(o.simplified_alpha));
 }
 
 namespace {
@@ -134,6 +137,14 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"estimate", estimate_name(o.estimate)});
     m.push_back({"max_edge", std::to_string(o.adaptive.max_edge)});
     m.push_back({"batch", std::to_string(o.adaptive.batch)});
+    if (r.simplified) {
+      char buf[240];
+      std::snprintf(buf, sizeof buf, "%zu -> %zu triangles, metric %s, min angle %g, geometry weight %g, feature tolerance %g",
+                    r.simplify.faces_before, r.simplify.faces_after, simplify_metric_name(o.simplify.metric), o.simplify.min_angle_deg,
+                    o.simplify.geometry_weight, o.simplify.feature_tolerance);
+      m.push_back({"simplified", buf});
+      m.push_back({"source_face", "the input face each output face was before collapses reshaped it; eval locates points by closest point"});
+    }
   }
   if (o.refine == Refinement::Uniform) {
     m.push_back({"levels", std::to_string(o.uniform.levels)});
@@ -159,7 +170,7 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"sample_rays", std::to_string(o.sample_rays)});
   }
   if (o.fit.method == FitMethod::LeastSquares) {
-    m.push_back({"alpha", std::to_string(o.fit.alpha)});
+    m.push_back({"alpha", std::to_string(r.simplified && r.simplify.collapses > 0 ? o.simplified_alpha : o.fit.alpha)});
     m.push_back({"regularizer", regularizer_name(o.fit.regularizer)});
     m.push_back({"mass", mass_matrix_name(o.fit.mass)});
     m.push_back({"noise_weighting", o.fit.weigh_by_noise ? "on" : "off"});
@@ -187,6 +198,90 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
   r.point_variance.resize(r.mesh.num_vertices(), 0.0);
   for (size_t i = before; i < r.mesh.num_vertices() && i < signal.variance().size(); ++i) r.point_variance[i] = signal.variance()[i];
   if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
+}
+
+// A budget below the input's: collapse where the transfer does not change. Surviving vertices
+// keep their traced transfer and its variance.
+void simplify_adaptively(const BakeOptions& o, BakeResult& r) {
+  SimplifyOptions so = o.simplify;
+  so.budget = o.adaptive.budget;
+  so.value_scale = unshadowed_norm(o.transfer.order);
+  std::vector<uint32_t> to;
+  r.simplified = true;
+  r.simplify = simplify(r.mesh, r.transfer, so, &to);
+  std::vector<double> variance(r.mesh.num_vertices(), 0.0);
+  for (size_t i = 0; i < to.size() && i < r.point_variance.size(); ++i)
+    if (to[i] != UINT32_MAX) variance[to[i]] = r.point_variance[i];
+  r.point_variance = std::move(variance);
+  if (!r.simplify.warning.empty()) r.warnings.push_back(r.simplify.warning);
+}
+
+// The fit of a simplified mesh: samples on the *source* surface (traced there, so they see the
+// shading the asset must reproduce, never a point inside the original geometry), each located
+// on the simplified surface by its closest point and weighted by that face's area over its
+// count. As many samples as the fit would give the output's faces; faces that none reaches take
+// the prior's interpolant. Not weighed by noise: a surviving vertex's traced value speaks for
+// its point, not for the patch of source surface its faces now stand for.
+void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock,
+                   BakeResult& r) {
+  SampleOptions so = o.samples;
+  so.min_per_triangle = 0;
+  if (so.density <= 0) so.per_triangle *= double(r.mesh.num_faces()) / double(std::max<size_t>(source.num_faces(), 1));
+  const SurfaceSamples on_source = make_surface_samples(source, so);
+  TransferOptions to = o.transfer;
+  to.rays = o.sample_rays;
+  to.seed = mix64(o.transfer.seed ^ 0x5A3D1E5ull);
+  to.stream_offset = 0;
+  if (progress.stage) progress.stage("samples", on_source.size());
+  TransferStats stats;
+  const RowMatrixXd values = shadowed_transfer(scene, on_source.points, on_source.normals, to, &stats, progress.add, &on_source.offsets);
+  const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads);
+  // Group by the face they landed on (a counting sort keeps the source order within a face).
+  const size_t F = r.mesh.num_faces(), S = at.size();
+  SurfaceSamples s;
+  s.begin.assign(F + 1, 0);
+  for (const SurfaceLocation& l : at) ++s.begin[l.face + 1];
+  for (size_t f = 0; f < F; ++f) s.begin[f + 1] += s.begin[f];
+  std::vector<size_t> next(s.begin.begin(), s.begin.end() - 1), order(S);
+  for (size_t k = 0; k < S; ++k) order[next[at[k].face]++] = k;
+  s.points.resize(Eigen::Index(S), 3), s.normals.resize(Eigen::Index(S), 3), s.offsets.resize(Eigen::Index(S), 3);
+  s.barycentric.resize(Eigen::Index(S), 3);
+  s.face.resize(S), s.weight.resize(S);
+  s.interpolated.assign(F, 0);
+  RowMatrixXd sorted(Eigen::Index(S), values.cols());
+  for (size_t j = 0; j < S; ++j) {
+    const SurfaceLocation& l = at[order[j]];
+    const Triangle& t = r.mesh.triangles[l.face];
+    const Eigen::Index row = Eigen::Index(j);
+    s.face[j] = l.face;
+    s.barycentric.row(row) = l.barycentric.transpose();
+    s.points.row(row) = (l.barycentric[0] * r.mesh.point(t[0]) + l.barycentric[1] * r.mesh.point(t[1]) + l.barycentric[2] * r.mesh.point(t[2])).transpose();
+    Eigen::Vector3d n = (l.barycentric[0] * r.mesh.normals.row(t[0]) + l.barycentric[1] * r.mesh.normals.row(t[1]) +
+                         l.barycentric[2] * r.mesh.normals.row(t[2])).transpose();
+    if (!(n.norm() > 0)) n = r.mesh.normals.row(t[0]).transpose();
+    s.normals.row(row) = n.normalized().transpose();
+    s.offsets.row(row) = s.normals.row(row);
+    sorted.row(row) = values.row(Eigen::Index(order[j]));
+  }
+  for (size_t f = 0; f < F; ++f) {
+    const size_t n = s.begin[f + 1] - s.begin[f];
+    const Triangle& t = r.mesh.triangles[f];
+    const double area = triangle_area(r.mesh.point(t[0]), r.mesh.point(t[1]), r.mesh.point(t[2]));
+    if (n == 0) s.interpolated[f] = 1;
+    for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) s.weight[k] = area / double(n);
+  }
+  r.fit_data.allocation = SampleAllocation::Area;
+  r.fit_data.moments = face_moments(r.mesh, s, sorted);
+  r.fit_data.samples = std::move(s);
+  r.fit_data.rays = stats.rays;
+  r.rays += stats.rays;
+  r.seconds_samples = clock.lap();
+  r.point = r.transfer;
+  FitOptions fo = o.fit;
+  fo.alpha = o.simplified_alpha;
+  r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, fo, &r.fit, nullptr);
+  r.seconds_fit = clock.lap();
+  if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
 
 double surface_area(const Mesh& m) {
@@ -370,11 +465,19 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   r.rays = stats.rays;
   r.seconds_transfer = clock.lap();
   if (o.refine == Refinement::Adaptive) {
-    refine_adaptively(scene, o, r);
+    if (o.adaptive.budget < r.mesh.num_faces()) {
+      if (progress.stage) progress.stage("simplify", 0);
+      simplify_adaptively(o, r);
+    } else {
+      refine_adaptively(scene, o, r);
+    }
     r.seconds_refine = clock.lap();
   }
   r.vertex_rays.assign(r.mesh.num_vertices(), o.transfer.rays);
-  if (o.fit.method != FitMethod::Point) fit(scene, o, progress, clock, r);
+  if (o.fit.method != FitMethod::Point) {
+    if (r.simplified && r.simplify.collapses > 0) fit_to_source(mesh, scene, o, progress, clock, r);
+    else fit(scene, o, progress, clock, r);
+  }
   if (r.point.size() == 0) r.point = r.transfer;
   if (r.fit_data.allocation == SampleAllocation::Pilot) r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
   if (o.target_error > 0) reach_target(scene, o, progress, clock, r);

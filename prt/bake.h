@@ -23,13 +23,16 @@
 #include "prtsub/prt/sample_plan.h"
 #include "prtsub/prt/vertex_top_up.h"
 #include "prtsub/subdiv/refine.h"
+#include "prtsub/subdiv/simplify.h"
 #include "prtsub/subdiv/uniform.h"
 
 namespace prtsub {
 
 enum class Refinement {
   None,      //!< the input's own triangles
-  Adaptive,  //!< to exactly `adaptive.budget` triangles where the transfer changes
+  //! to exactly `adaptive.budget` triangles where the transfer changes: split above the
+  //! input's count, simplified (collapses where it does not change) below it
+  Adaptive,
   Uniform,   //!< OpenSubdiv 1→4 splits, `uniform.levels` times: the baseline
 };
 Refinement parse_refinement(const std::string& name);  //!< none, adaptive, uniform \throw InputError
@@ -42,6 +45,13 @@ struct BakeOptions {
   AssetSignal signal = AssetSignal::Transfer;  //!< Ao: order-1 transfer, written as ambient occlusion
   Refinement refine = Refinement::None;
   RefineOptions adaptive;                      //!< Adaptive: budget (required), batch, max_edge
+  //! Adaptive with a budget below the input's: the metric and the guards (its budget and value
+  //! scale come from `adaptive` and the SH order)
+  SimplifyOptions simplify;
+  //! the fit's regulariser weight on a simplified mesh (fit.alpha is the refined and unrefined
+  //! meshes'): a coarse face spans real curvature of the transfer, which a strong edge regulariser
+  //! flattens; 0.002 measured best at 10% on bunny, chinese_dragon and mori_knob (BENCHMARKS.md)
+  double simplified_alpha = 0.002;
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples
@@ -88,6 +98,8 @@ struct BakeResult {
   RowMatrixXd point;     //!< #V by N²: the point-sampled values (equal to transfer when fit is point)
   std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
   RefineStats refine;    //!< adaptive refinement's counts and times
+  bool simplified = false;     //!< the budget was below the input's: simplified, not refined
+  SimplifyStats simplify;      //!< simplification's counts and times
   FitData fit_data;      //!< the samples (empty when fit is point)
   TopUpStats top_up;     //!< the second round of vertex rays (Pilot allocation)
   //! Pilot allocation: the asset's error measured on the pilot's held-out samples (what eval

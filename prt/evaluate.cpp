@@ -4,13 +4,16 @@
 // cumulative area with one seeded offset gives each triangle a share of points proportional to
 // its area without clumping, and every asset baked from a source is judged on the same points.
 // Each point's transfer in the asset is found through source_face: only faces that lie in the
-// point's input triangle are candidates, so refinement of any kind can be judged.
+// point's input triangle are candidates, so refinement of any kind can be judged. A simplified
+// asset's faces no longer lie in input triangles; there each point is located at its closest
+// point on the asset's surface instead (Embree's point queries).
 #include "prtsub/prt/evaluate.h"
 
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
+#include "prtsub/prt/closest_point.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
@@ -74,6 +77,21 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
   return ref;
 }
 
+namespace {
+
+// RMS and 95th percentile of the points' errors (relative), in percent.
+void summarize(std::vector<double>& err, EvalResult& r) {
+  r.points = err.size();
+  if (err.empty()) throw InputError("eval: no reference point could be located in the asset (was the asset baked from this source?)");
+  double s = 0;
+  for (double e : err) s += e * e;
+  r.rms_percent = 100 * std::sqrt(s / static_cast<double>(err.size()));
+  std::sort(err.begin(), err.end());
+  r.p95_percent = 100 * err[std::min(err.size() - 1, static_cast<size_t>(0.95 * static_cast<double>(err.size())))];
+}
+
+}  // namespace
+
 EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
                     const std::vector<uint32_t>& source_face, const RowMatrixXd& transfer) {
   const int K = static_cast<int>(std::min<Eigen::Index>(transfer.cols(), ref.transfer.cols()));
@@ -125,13 +143,37 @@ EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const s
     }
     err.push_back(std::sqrt(e2) / unit);
   }
-  r.points = err.size();
-  if (err.empty()) throw InputError("eval: no reference point could be located in the asset (was the asset baked from this source?)");
-  double s = 0;
-  for (double e : err) s += e * e;
-  r.rms_percent = 100 * std::sqrt(s / static_cast<double>(err.size()));
-  std::sort(err.begin(), err.end());
-  r.p95_percent = 100 * err[std::min(err.size() - 1, static_cast<size_t>(0.95 * static_cast<double>(err.size())))];
+  summarize(err, r);
+  return r;
+}
+
+EvalResult evaluate_by_closest_point(const Reference& ref, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
+                                     const RowMatrixXd& transfer, int threads) {
+  const int K = static_cast<int>(std::min<Eigen::Index>(transfer.cols(), ref.transfer.cols()));
+  const double unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(K))));
+  Mesh m;  // the asset's faces as a mesh whose render vertices are its positions
+  m.positions = positions;
+  m.vertex_position.resize(static_cast<size_t>(positions.rows()));
+  for (size_t i = 0; i < m.vertex_position.size(); ++i) m.vertex_position[i] = static_cast<uint32_t>(i);
+  m.triangles = triangles;
+  const std::vector<SurfaceLocation> at = closest_points(m, ref.points, threads);
+  EvalResult r;
+  r.reference_rays = ref.rays;
+  r.noise_floor_percent = 100 * ref.noise_floor;
+  std::vector<double> err;
+  err.reserve(at.size());
+  for (size_t i = 0; i < at.size(); ++i) {
+    const Triangle& t = triangles[at[i].face];
+    const Eigen::Vector3d& w = at[i].barycentric;
+    double e2 = 0;
+    for (int k = 0; k < K; ++k) {
+      const double g = w[0] * transfer(t[0], k) + w[1] * transfer(t[1], k) + w[2] * transfer(t[2], k);
+      const double d = g - ref.transfer(static_cast<Eigen::Index>(i), k);
+      e2 += d * d;
+    }
+    err.push_back(std::sqrt(e2) / unit);
+  }
+  summarize(err, r);
   return r;
 }
 

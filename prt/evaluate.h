@@ -42,5 +42,10 @@ double unshadowed_norm(int order);
 //! ‖g(p) − t_ref(p)‖ / ‖t_unshadowed‖; RMS and 95th percentile over points, in percent.
 EvalResult evaluate(const Reference& reference, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
                     const std::vector<uint32_t>& source_face, const RowMatrixXd& transfer);
+//! The same for an asset whose faces do not lie in the source's (a simplified one): each
+//! reference point is located at its closest point on the asset's surface (ties: the lower
+//! face), and the asset's transfer interpolated there. The same for any thread count.
+EvalResult evaluate_by_closest_point(const Reference& reference, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
+                                     const RowMatrixXd& transfer, int threads = 0);
 
 }  // namespace prtsub

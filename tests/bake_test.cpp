@@ -138,6 +138,41 @@ TEST(Bake, AnErrorTargetThatInterpolationHoldsUpGivesTheFitMoreSamples) {
   EXPECT_EQ((one.transfer - more.transfer).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Bake, ABudgetBelowTheInputSimplifiesAndTheFitToTheSourceBeatsItsPointValues) {
+  // A sphere resting on a plane: the contact shadow is what a simplified asset must keep.
+  const Mesh mesh = test::build(test::merge(test::icosphere(3), test::transformed(test::grid(16), 5.0, Eigen::Vector3d(-2.5, -2.5, -1))));
+  ASSERT_EQ(mesh.num_faces(), 1280u + 512u);
+  BakeOptions o;
+  o.refine = Refinement::Adaptive, o.adaptive.budget = 451;
+  o.transfer.rays = 64, o.transfer.threads = 1;
+  const BakeResult lsq = bake(mesh, o);
+  EXPECT_TRUE(lsq.simplified);
+  EXPECT_EQ(lsq.mesh.num_faces(), 451u);  // exact: the plane has a boundary
+  EXPECT_TRUE(lsq.transfer.allFinite());
+  EXPECT_EQ(lsq.transfer.rows(), static_cast<Eigen::Index>(lsq.mesh.num_vertices()));
+  EXPECT_GT(lsq.fit_data.samples.size(), 0u);
+  bool recorded = false;
+  for (const auto& [k, v] : lsq.metadata) recorded |= k == "simplified";
+  EXPECT_TRUE(recorded);
+  o.transfer.threads = 2;
+  EXPECT_EQ((bake(mesh, o).transfer - lsq.transfer).cwiseAbs().maxCoeff(), 0.0);  // any thread count
+  // One reference judges all three: the fit against the traced vertex values, and the transfer
+  // metric against the geometric one.
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  ReferenceOptions ro;
+  ro.points = 4000, ro.rays = 1024, ro.order = 4;
+  const Reference ref = make_reference(mesh, scene, ro);
+  auto error = [&](const BakeResult& r, const RowMatrixXd& v) {
+    return evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, v).rms_percent;
+  };
+  const double e_fit = error(lsq, lsq.transfer), e_point = error(lsq, lsq.point);
+  EXPECT_LT(e_fit, 0.9 * e_point) << e_fit << "% against " << e_point << "%";
+  o.simplify.metric = SimplifyMetric::Geometry;
+  const BakeResult geometry = bake(mesh, o);
+  const double e_geometry = error(geometry, geometry.transfer);
+  EXPECT_LT(e_fit, e_geometry) << e_fit << "% against " << e_geometry << "%";
+}
+
 TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {
   BakeOptions o;
   o.signal = AssetSignal::Ao;

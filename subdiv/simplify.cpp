@@ -1,0 +1,421 @@
+// Budgeted simplification by half-edge collapses on OpenMesh's Decimater.
+//
+// The mesh goes into an OpenMesh TriMesh over its welded positions; each face keeps its render
+// corners (and source face) beside it, so creases and UV seams survive: a position edge whose
+// two faces do not share render vertices is a feature, and OpenMesh's own rule lets a feature
+// vertex collapse only along a feature edge. Faces OpenMesh cannot take (non-manifold edges or
+// vertices, repeated corners) stay out of it, unchanged, with their vertices locked.
+//
+// One non-binary module ranks a collapse of v0 into v1 (Vanhoey et al. 2012, section 4.1):
+//   E_signal = Σ_t area(t) · ‖L(p0) − L_t(p0)‖² over the faces t the collapse changes, where
+//              L_t(p0) extends t's linear interpolant to p0 with its constant gradient (their
+//              equation 4: p0 projected onto t's plane, barycentrics allowed outside t), and
+//              L(p0) is v0's own value on t's side of any crease;
+//   E_geom   = Σ_f area(f) · ((p1 − p0) · n_f)² over the faces around v0 before the collapse:
+//              the memoryless quadric (Lindstrom and Turk), evaluated where v0 goes.
+// Both are memoryless, as the paper combines them. The signal is SH in one global frame, so the
+// distance of the paper's equation 5 is the coefficient distance. Priority:
+//   E_signal / value_scale² + geometry_weight · E_geom / diagonal²   (Geometry: E_geom alone).
+// The same module refuses collapses that flip a face (its normal turns by 90° or more), make a
+// face below the minimum angle or without area, or move a boundary or feature line by more than
+// its tolerance (the distance of v0 from the line that replaces its two line edges).
+//
+// A collapse removes two faces, or one on a boundary, so the Decimater is run to budget + 1;
+// if it stops there, one boundary collapse (the best legal one) ends exactly on the budget; a
+// closed surface has no such collapse and ends one below, with a warning.
+#include "prtsub/subdiv/simplify.h"
+
+// OpenMesh's property containers trip g++ 12's maybe-uninitialized when instantiated here.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <OpenMesh/Core/System/omstream.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModBaseT.hh>
+#include <algorithm>
+#include <cmath>
+
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/refine.h"
+#include "prtsub/subdiv/stopwatch.h"
+
+namespace prtsub {
+
+SimplifyMetric parse_simplify_metric(const std::string& name) {
+  if (name == "transfer") return SimplifyMetric::Transfer;
+  if (name == "geometry") return SimplifyMetric::Geometry;
+  throw InputError("unknown simplification metric '" + name + "' (expected transfer or geometry)");
+}
+
+const char* simplify_metric_name(SimplifyMetric m) { return m == SimplifyMetric::Geometry ? "geometry" : "transfer"; }
+
+namespace {
+
+struct Traits : OpenMesh::DefaultTraits {
+  typedef OpenMesh::Vec3d Point;
+  typedef OpenMesh::Vec3d Normal;
+};
+using OMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+using OpenMesh::FaceHandle;
+using OpenMesh::HalfedgeHandle;
+using OpenMesh::VertexHandle;
+
+inline Eigen::Vector3d vec(const OMesh::Point& p) { return {p[0], p[1], p[2]}; }
+
+// Everything the module reads: the input, and each OpenMesh face's corners as our mesh has them.
+struct State {
+  const Mesh* mesh = nullptr;
+  const RowMatrixXd* values = nullptr;
+  SimplifyOptions options;
+  double diagonal = 1, cos_min_angle = 1;
+  std::vector<std::array<uint32_t, 3>> corner_pos, corner_render;  // per OpenMesh face, our corner order
+  std::vector<uint32_t> source;                                     // per OpenMesh face
+  std::vector<char> feature;                                        // per OpenMesh edge
+
+  uint32_t render_at(FaceHandle f, VertexHandle v) const {
+    const auto& p = corner_pos[size_t(f.idx())];
+    for (int k = 0; k < 3; ++k)
+      if (p[k] == uint32_t(v.idx())) return corner_render[size_t(f.idx())][k];
+    return UINT32_MAX;
+  }
+};
+
+// Smallest-angle cosine test: false if any corner of (a, b, c) is below the minimum angle.
+bool angles_ok(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double cos_min) {
+  const Eigen::Vector3d p[3] = {a, b, c};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
+    const double n = u.norm() * w.norm();
+    if (!(n > 0) || u.dot(w) / n > cos_min) return false;
+  }
+  return true;
+}
+
+// Distance of p from the segment [a, b].
+double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (a + t * d - p).norm();
+}
+
+class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
+ public:
+  typedef ModTransfer Self;
+  typedef OpenMesh::Decimater::ModHandleT<Self> Handle;
+  typedef OpenMesh::Decimater::ModBaseT<OMesh> Base;
+  typedef Base::CollapseInfo CollapseInfo;
+  DECIMATER_MODNAME(PrtsubTransfer)
+
+  explicit ModTransfer(OMesh& mesh) : Base(mesh, false) {}
+  void set_state(State* s) { s_ = s; }
+
+  float collapse_priority(const CollapseInfo& ci) override {
+    if (!sides(ci)) return float(ILLEGAL_COLLAPSE);
+    const OMesh& m = Base::mesh();
+    const Eigen::Vector3d p0 = vec(ci.p0), p1 = vec(ci.p1);
+    const Eigen::Index K = s_->values->cols();
+    double e_geom = 0, e_signal = 0;
+    for (const auto& [f, r1] : changed_) {
+      const auto& pos = s_->corner_pos[size_t(f.idx())];
+      const auto& ren = s_->corner_render[size_t(f.idx())];
+      int k0 = 0;
+      while (pos[k0] != uint32_t(ci.v0.idx())) ++k0;
+      const int ka = (k0 + 1) % 3, kb = (k0 + 2) % 3;
+      const Eigen::Vector3d pa = vec(m.point(VertexHandle(int(pos[ka])))), pb = vec(m.point(VertexHandle(int(pos[kb]))));
+      const Eigen::Vector3d n0 = (pa - p0).cross(pb - p0), n1 = (pa - p1).cross(pb - p1);
+      if (!(n0.dot(n1) > 0)) return float(ILLEGAL_COLLAPSE);  // flipped, or no area left
+      if (!angles_ok(p1, pa, pb, s_->cos_min_angle)) return float(ILLEGAL_COLLAPSE);
+      const double area1 = 0.5 * n1.norm();
+      if (K > 0) {
+        // L_t(p0): t's interpolant extended with its constant gradient (least-squares barycentrics).
+        Eigen::Matrix<double, 3, 2> J;
+        J.col(0) = pa - p1, J.col(1) = pb - p1;
+        const Eigen::Vector2d c = (J.transpose() * J).ldlt().solve(J.transpose() * (p0 - p1));
+        const double* l1 = s_->values->row(r1).data();
+        const double* la = s_->values->row(ren[ka]).data();
+        const double* lb = s_->values->row(ren[kb]).data();
+        const double* l0 = s_->values->row(ren[k0]).data();
+        double d2 = 0;
+        for (Eigen::Index i = 0; i < K; ++i) {
+          const double d = l0[i] - (l1[i] + c[0] * (la[i] - l1[i]) + c[1] * (lb[i] - l1[i]));
+          d2 += d * d;
+        }
+        e_signal += area1 * d2;
+      }
+    }
+    for (OMesh::ConstVertexFaceIter f = m.cvf_iter(ci.v0); f.is_valid(); ++f) {
+      const Eigen::Vector3d n = vec(m.calc_face_normal(*f));
+      const double area = face_area(*f);
+      if (n.norm() > 0) e_geom += area * std::pow((p1 - p0).dot(n.normalized()), 2);
+    }
+    if (!lines_ok(ci)) return float(ILLEGAL_COLLAPSE);
+    const double d2 = s_->diagonal * s_->diagonal;
+    const double scale2 = s_->options.value_scale * s_->options.value_scale;
+    const double e = s_->options.metric == SimplifyMetric::Geometry || K == 0
+                         ? e_geom / d2
+                         : e_signal / scale2 + s_->options.geometry_weight * e_geom / d2;
+    return float(std::min(e, 1e30));
+  }
+
+  // The collapse is about to happen: the changed faces' corners move from v0 to v1 (on their
+  // side of a crease), before OpenMesh forgets which faces those were.
+  void preprocess_collapse(const CollapseInfo& ci) override {
+    if (!sides(ci)) return;  // cannot happen for a collapse this module allowed
+    for (const auto& [f, r1] : changed_) {
+      auto& pos = s_->corner_pos[size_t(f.idx())];
+      for (int k = 0; k < 3; ++k)
+        if (pos[k] == uint32_t(ci.v0.idx())) pos[k] = uint32_t(ci.v1.idx()), s_->corner_render[size_t(f.idx())][k] = r1;
+    }
+  }
+
+ private:
+  double face_area(FaceHandle f) {
+    const auto& p = s_->corner_pos[size_t(f.idx())];
+    const OMesh& m = Base::mesh();
+    return triangle_area(vec(m.point(VertexHandle(int(p[0])))), vec(m.point(VertexHandle(int(p[1])))),
+                         vec(m.point(VertexHandle(int(p[2])))));
+  }
+
+  // Fills changed_ with the faces around v0 other than fl and fr, each with the render vertex of
+  // v1 it will use: the one of fl or fr, whichever it reaches around v0 without crossing a
+  // feature edge. False when a face reaches neither (a feature the collapse would break).
+  bool sides(const CollapseInfo& ci) {
+    const OMesh& m = Base::mesh();
+    changed_.clear();
+    ring_.clear();
+    for (OMesh::ConstVertexFaceIter f = m.cvf_iter(ci.v0); f.is_valid(); ++f) ring_.push_back({*f, -1});
+    const FaceHandle start[2] = {ci.fl, ci.fr};
+    uint32_t render[2] = {UINT32_MAX, UINT32_MAX};
+    for (int side = 0; side < 2; ++side) {
+      if (!start[side].is_valid()) continue;
+      render[side] = s_->render_at(start[side], ci.v1);
+      // Flood over faces around v0 that share a non-feature edge (v0, x).
+      stack_.assign(1, start[side]);
+      for (auto& [f, label] : ring_)
+        if (f == start[side] && label < 0) label = side;
+      while (!stack_.empty()) {
+        const FaceHandle f = stack_.back();
+        stack_.pop_back();
+        for (OMesh::ConstFaceHalfedgeIter h = m.cfh_iter(f); h.is_valid(); ++h) {
+          const VertexHandle a = m.from_vertex_handle(*h), b = m.to_vertex_handle(*h);
+          if (a != ci.v0 && b != ci.v0) continue;
+          if (s_->feature[size_t(m.edge_handle(*h).idx())] || m.is_boundary(m.edge_handle(*h))) continue;
+          const FaceHandle g = m.face_handle(m.opposite_halfedge_handle(*h));
+          for (auto& [rf, label] : ring_)
+            if (rf == g && label < 0) label = side, stack_.push_back(g);
+        }
+      }
+    }
+    for (const auto& [f, label] : ring_) {
+      if (f == ci.fl || f == ci.fr) continue;
+      if (label < 0 || render[label] == UINT32_MAX) return false;
+      changed_.push_back({f, render[label]});
+    }
+    return true;
+  }
+
+  // A boundary or feature vertex may only slide along its line: the line's other edge at v0,
+  // (w, v0), becomes (w, v1), and v0 must lie within the tolerance of that new edge.
+  bool lines_ok(const CollapseInfo& ci) {
+    const OMesh& m = Base::mesh();
+    const bool boundary = m.is_boundary(ci.v0);
+    const bool feature = m.status(ci.v0).feature();
+    if (!boundary && !feature) return true;
+    const double tol = s_->options.feature_tolerance * s_->diagonal;
+    for (OMesh::ConstVertexOHalfedgeIter h = m.cvoh_iter(ci.v0); h.is_valid(); ++h) {
+      const VertexHandle w = m.to_vertex_handle(*h);
+      if (w == ci.v1) continue;
+      const OMesh::EdgeHandle e = m.edge_handle(*h);
+      const bool on_line = (boundary && m.is_boundary(e)) || (feature && s_->feature[size_t(e.idx())]);
+      if (on_line && segment_distance(vec(ci.p0), vec(m.point(w)), vec(ci.p1)) > tol) return false;
+    }
+    return true;
+  }
+
+  State* s_ = nullptr;
+  std::vector<std::pair<FaceHandle, uint32_t>> changed_;
+  std::vector<std::pair<FaceHandle, int>> ring_;
+  std::vector<FaceHandle> stack_;
+};
+
+size_t live_faces(const OMesh& m) {
+  size_t n = 0;
+  for (OMesh::ConstFaceIter f = m.faces_begin(); f != m.faces_end(); ++f) n += !m.status(*f).deleted();
+  return n;
+}
+
+// The best legal collapse along a boundary edge (one face fewer), done; false if there is none.
+bool boundary_collapse(OMesh& m, ModTransfer& module) {
+  HalfedgeHandle best;
+  float best_priority = 0;
+  for (OMesh::HalfedgeIter h = m.halfedges_begin(); h != m.halfedges_end(); ++h) {
+    if (m.status(*h).deleted() || !m.is_boundary(m.edge_handle(*h))) continue;
+    const VertexHandle v0 = m.from_vertex_handle(*h);
+    if (m.status(v0).locked() || !m.is_collapse_ok(*h)) continue;
+    if (m.status(v0).feature() && !m.status(m.edge_handle(*h)).feature()) continue;
+    ModTransfer::CollapseInfo ci(m, *h);
+    if (ci.vl.is_valid() && ci.vr.is_valid()) continue;
+    if (m.cw_rotated_halfedge_handle(m.cw_rotated_halfedge_handle(*h)) == *h) continue;  // one face at v0
+    const float p = module.collapse_priority(ci);
+    if (p < 0) continue;
+    if (!best.is_valid() || p < best_priority) best = *h, best_priority = p;
+  }
+  if (!best.is_valid()) return false;
+  ModTransfer::CollapseInfo ci(m, best);
+  module.preprocess_collapse(ci);
+  m.collapse(best);
+  return true;
+}
+
+}  // namespace
+
+SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options, std::vector<uint32_t>* removed_to) {
+  const Stopwatch clock;
+  SimplifyStats stats;
+  stats.faces_before = mesh.num_faces();
+  if (values.rows() != static_cast<Eigen::Index>(mesh.num_vertices()))
+    throw InputError("simplify: " + std::to_string(values.rows()) + " value rows for " + std::to_string(mesh.num_vertices()) +
+                     " render vertices");
+  if (!(options.min_angle_deg >= 0 && options.min_angle_deg < 60))
+    throw InputError("simplify: the minimum angle must be in [0, 60) degrees, got " + std::to_string(options.min_angle_deg));
+  if (!(options.value_scale > 0) || !(options.geometry_weight >= 0) || !(options.feature_tolerance >= 0))
+    throw InputError("simplify: value_scale must be > 0, geometry_weight and feature_tolerance >= 0");
+  if (options.budget >= mesh.num_faces()) {
+    stats.faces_after = mesh.num_faces();
+    stats.warning = "budget " + std::to_string(options.budget) + " is not below the input's " + std::to_string(mesh.num_faces()) +
+                    " triangles: mesh left as it is";
+    return stats;
+  }
+
+  State s;
+  s.mesh = &mesh, s.values = &values, s.options = options;
+  s.diagonal = mesh.positions.rows() ? std::max(bounds(mesh.positions).diagonal(), 1e-300) : 1;
+  s.cos_min_angle = std::cos(options.min_angle_deg * M_PI / 180);
+
+  OMesh om;
+  om.request_vertex_status();
+  om.request_halfedge_status();
+  om.request_edge_status();
+  om.request_face_status();
+  std::vector<VertexHandle> vh(static_cast<size_t>(mesh.positions.rows()));
+  for (Eigen::Index p = 0; p < mesh.positions.rows(); ++p)
+    vh[size_t(p)] = om.add_vertex(OMesh::Point(mesh.positions(p, 0), mesh.positions(p, 1), mesh.positions(p, 2)));
+  std::vector<uint32_t> kept;  // our faces OpenMesh could not take
+  omerr().disable();  // a refused face is counted, not printed
+  for (uint32_t f = 0; f < mesh.num_faces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const uint32_t p[3] = {mesh.vertex_position[t[0]], mesh.vertex_position[t[1]], mesh.vertex_position[t[2]]};
+    FaceHandle fh;
+    if (p[0] != p[1] && p[1] != p[2] && p[0] != p[2]) fh = om.add_face(vh[p[0]], vh[p[1]], vh[p[2]]);
+    if (!fh.is_valid()) {
+      kept.push_back(f);
+      continue;
+    }
+    s.corner_pos.push_back({p[0], p[1], p[2]});
+    s.corner_render.push_back(t);
+    s.source.push_back(mesh.source_face[f]);
+  }
+  omerr().enable();
+  stats.kept_faces = kept.size();
+
+  // Features: edges whose two faces see different render vertices at an end.
+  s.feature.assign(om.n_edges(), 0);
+  std::vector<int> feature_edges(om.n_vertices(), 0);
+  for (OMesh::EdgeIter e = om.edges_begin(); e != om.edges_end(); ++e) {
+    const HalfedgeHandle h = om.halfedge_handle(*e, 0);
+    const FaceHandle f = om.face_handle(h), g = om.face_handle(om.opposite_halfedge_handle(h));
+    if (!f.is_valid() || !g.is_valid()) continue;
+    const VertexHandle a = om.from_vertex_handle(h), b = om.to_vertex_handle(h);
+    if (s.render_at(f, a) != s.render_at(g, a) || s.render_at(f, b) != s.render_at(g, b)) {
+      s.feature[size_t(e->idx())] = 1;
+      om.status(*e).set_feature(true);
+      ++feature_edges[size_t(a.idx())], ++feature_edges[size_t(b.idx())];
+    }
+  }
+  std::vector<char> lock(om.n_vertices(), 0);
+  for (uint32_t f : kept)
+    for (int k = 0; k < 3; ++k) lock[mesh.vertex_position[mesh.triangles[f][k]]] = 1;
+  for (OMesh::VertexIter v = om.vertices_begin(); v != om.vertices_end(); ++v) {
+    const int n = feature_edges[size_t(v->idx())];
+    if (n > 0) om.status(*v).set_feature(true);
+    // A feature's corner or end, or a feature meeting a boundary: where it would slide is not a line.
+    if ((n > 0 && n != 2) || (n > 0 && om.is_boundary(*v)) || om.is_isolated(*v)) lock[size_t(v->idx())] = 1;
+  }
+  for (OMesh::VertexIter v = om.vertices_begin(); v != om.vertices_end(); ++v)
+    if (lock[size_t(v->idx())]) om.status(*v).set_locked(true), stats.locked_vertices += !om.is_isolated(*v);
+
+  // The budget counts the faces OpenMesh could not take too.
+  const size_t target = options.budget > kept.size() ? options.budget - kept.size() : 0;
+  {
+    OpenMesh::Decimater::DecimaterT<OMesh> decimater(om);
+    ModTransfer::Handle handle;
+    decimater.add(handle);
+    decimater.module(handle).set_state(&s);
+    decimater.module(handle).set_binary(false);
+    if (!decimater.initialize()) throw InputError("simplify: OpenMesh's decimater did not initialise");
+    stats.collapses = decimater.decimate_to_faces(0, target + 1);
+    if (live_faces(om) == target + 1) {
+      if (boundary_collapse(om, decimater.module(handle))) {
+        ++stats.collapses;
+      } else {
+        // The decimater counts deleted faces as faces: ask it for one collapse more.
+        stats.collapses += decimater.decimate_to_faces(0, om.n_faces() - 1);
+        if (live_faces(om) + kept.size() != options.budget)
+          stats.warning = "budget " + std::to_string(options.budget) + " cannot be met exactly: no boundary collapse is left "
+                          "(a closed surface has an even triangle count): " + std::to_string(live_faces(om) + kept.size());
+      }
+    }
+  }
+  if (const size_t n = live_faces(om) + kept.size(); n > options.budget)
+    stats.warning = "budget " + std::to_string(options.budget) + " not reached: the guards (flips, minimum angle " +
+                    std::to_string(options.min_angle_deg) + "°, boundaries and features) allow no further collapse at " +
+                    std::to_string(n) + " triangles";
+
+  // Gather the surviving faces (OpenMesh's order, then the kept ones) and compact.
+  std::vector<Triangle> tri;
+  std::vector<uint32_t> src;
+  for (OMesh::FaceIter f = om.faces_begin(); f != om.faces_end(); ++f) {
+    if (om.status(*f).deleted()) continue;
+    tri.push_back(s.corner_render[size_t(f->idx())]);
+    src.push_back(s.source[size_t(f->idx())]);
+  }
+  for (uint32_t f : kept) tri.push_back(mesh.triangles[f]), src.push_back(mesh.source_face[f]);
+  std::vector<uint32_t> render_to(mesh.num_vertices(), UINT32_MAX), pos_to(size_t(mesh.positions.rows()), UINT32_MAX);
+  std::vector<uint32_t> render_order, pos_order;
+  for (Triangle& t : tri)
+    for (uint32_t& v : t) {
+      if (render_to[v] == UINT32_MAX) {
+        render_to[v] = uint32_t(render_order.size());
+        render_order.push_back(v);
+        const uint32_t p = mesh.vertex_position[v];
+        if (pos_to[p] == UINT32_MAX) pos_to[p] = uint32_t(pos_order.size()), pos_order.push_back(p);
+      }
+      v = render_to[v];
+    }
+  Mesh out = mesh;
+  out.positions.resize(static_cast<Eigen::Index>(pos_order.size()), 3);
+  for (size_t i = 0; i < pos_order.size(); ++i) out.positions.row(Eigen::Index(i)) = mesh.positions.row(pos_order[i]);
+  out.vertex_position.resize(render_order.size());
+  out.normals.resize(static_cast<Eigen::Index>(render_order.size()), 3);
+  if (mesh.has_uv()) out.uv.resize(static_cast<Eigen::Index>(render_order.size()), 2);
+  RowMatrixXd vals(static_cast<Eigen::Index>(render_order.size()), values.cols());
+  for (size_t i = 0; i < render_order.size(); ++i) {
+    const uint32_t v = render_order[i];
+    out.vertex_position[i] = pos_to[mesh.vertex_position[v]];
+    out.normals.row(Eigen::Index(i)) = mesh.normals.row(v);
+    if (mesh.has_uv()) out.uv.row(Eigen::Index(i)) = mesh.uv.row(v);
+    vals.row(Eigen::Index(i)) = values.row(v);
+  }
+  out.triangles = std::move(tri);
+  out.source_face = std::move(src);
+  mesh = std::move(out);
+  values = std::move(vals);
+  if (removed_to) *removed_to = std::move(render_to);
+
+  stats.faces_after = mesh.num_faces();
+  stats.min_angle_after_deg = min_angle_deg(mesh);
+  for (double a : face_min_angles_deg(mesh)) stats.faces_below_min_angle += a < options.min_angle_deg;
+  stats.seconds = clock.total();
+  return stats;
+}
+
+}  // namespace prtsub

@@ -1,0 +1,60 @@
+// Simplification of a mesh to a triangle budget below its own count, by half-edge collapses
+// ranked by how much they change a vertex signal (Vanhoey et al.'s functional metric) and the
+// geometry (a memoryless quadric). Refinement's opposite: the signal is the same matrix of
+// per-render-vertex values, so this room needs neither Embree nor SH.
+#pragma once
+
+#include <string>
+
+#include "prtsub/subdiv/mesh.h"
+
+namespace prtsub {
+
+enum class SimplifyMetric {
+  Transfer,  //!< the signal's change plus the geometric quadric
+  Geometry,  //!< the quadric alone (the baseline)
+};
+SimplifyMetric parse_simplify_metric(const std::string& name);  //!< transfer, geometry
+const char* simplify_metric_name(SimplifyMetric m);
+
+struct SimplifyOptions {
+  size_t budget = 0;  //!< output triangle count (below the input's)
+  SimplifyMetric metric = SimplifyMetric::Transfer;
+  //! The signal's distance is measured in units of this value (eval's unit for transfer, the
+  //! unshadowed norm); the quadric in units of the bounding-box diagonal.
+  double value_scale = 1;
+  //! weight of the quadric against the signal: a collapse that moves the surface by 0.1% of the
+  //! diagonal costs as much as one that changes the signal by 1% of value_scale
+  double geometry_weight = 100;
+  double min_angle_deg = 5;  //!< no collapse creates a face with a smaller angle
+  //! no collapse moves a boundary or a crease / UV-seam line by more than this share of the
+  //! bounding-box diagonal
+  double feature_tolerance = 1e-3;
+};
+
+struct SimplifyStats {
+  size_t faces_before = 0, faces_after = 0, collapses = 0;
+  size_t locked_vertices = 0;    //!< crease corners, ends and non-manifold faces' vertices: never removed
+  size_t kept_faces = 0;         //!< faces OpenMesh could not take (non-manifold, repeated corners): kept as they are
+  double min_angle_after_deg = 0;
+  size_t faces_below_min_angle = 0;  //!< after: all of them faces of the input no collapse touched
+  double seconds = 0;
+  std::string warning;  //!< non-empty when the budget could not be met exactly, and why
+};
+
+//! Simplifies `mesh` and its #V by K `values` to `options.budget` triangles with OpenMesh's
+//! Decimater and a module of ours. Collapses are half-edge collapses: every surviving vertex
+//! keeps its position, normal, UVs and value (traced transfer stays valid). Guards, each a reason
+//! to refuse a collapse: a face's normal turning by more than 90°, a new face below
+//! min_angle_deg, a boundary or feature line moving by more than feature_tolerance, and
+//! OpenMesh's own link condition (so a manifold input stays manifold). Creases and UV seams
+//! (position edges whose faces do not share render vertices) are features: their vertices only
+//! slide along them, and where three or more meet, or one ends, the vertex is locked. Each
+//! output face keeps the source_face of the input face it was (faces are never created).
+//! \param values #V by K, may have no columns
+//! \param removed_to if given, receives for every input render vertex its output index, or
+//!        UINT32_MAX for removed ones
+SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options,
+                       std::vector<uint32_t>* removed_to = nullptr);
+
+}  // namespace prtsub

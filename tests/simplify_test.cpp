@@ -1,0 +1,205 @@
+#include "prtsub/subdiv/simplify.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "helpers.h"
+#include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/refine.h"
+
+namespace prtsub {
+namespace {
+
+double total_area(const Mesh& m) {
+  double a = 0;
+  for (const Triangle& t : m.triangles) a += triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+  return a;
+}
+
+EdgeCounts position_edges(const Mesh& m) {
+  std::vector<Triangle> t(m.triangles.size());
+  for (size_t f = 0; f < t.size(); ++f)
+    for (int k = 0; k < 3; ++k) t[f][k] = m.vertex_position[m.triangles[f][k]];
+  return count_edges(t);
+}
+
+// One value per render vertex: a function of its position.
+template <class F>
+RowMatrixXd values_of(const Mesh& m, F&& f, int K = 1) {
+  RowMatrixXd v(static_cast<Eigen::Index>(m.num_vertices()), K);
+  for (uint32_t i = 0; i < m.num_vertices(); ++i)
+    for (int k = 0; k < K; ++k) v(i, k) = f(m.point(i)) * (k + 1);
+  return v;
+}
+
+// A unit cube with each side an n×n grid (welded by the loader), every cube edge a crease.
+RawMesh tessellated_cube(int n) {
+  RawMesh m;
+  std::vector<Eigen::Vector3d> pts;
+  m.face_offsets.push_back(0);
+  // Each side: origin, two spanning axes (their cross product points out).
+  const Eigen::Vector3d o[6] = {{0, 0, 0}, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}};
+  const Eigen::Vector3d u[6] = {{0, 1, 0}, {1, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 0, 1}, {0, 1, 0}};
+  const Eigen::Vector3d w[6] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int s = 0; s < 6; ++s) {
+    const int64_t base = static_cast<int64_t>(pts.size());
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) pts.push_back(o[s] + u[s] * double(i) / n + w[s] * double(j) / n);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int64_t a = base + j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+        m.face_indices.insert(m.face_indices.end(), {a, b, c, a, c, d});
+        m.face_offsets.push_back(m.face_indices.size() - 3);
+        m.face_offsets.push_back(m.face_indices.size());
+      }
+  }
+  m.positions.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) m.positions.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  return m;
+}
+
+TEST(Simplify, ReachesTheBudgetExactlyAndKeepsSurvivingVerticesAsTheyWere) {
+  // Open: exact for any budget (a boundary collapse removes one face).
+  for (size_t budget : {201u, 200u, 57u}) {
+    Mesh m = test::build(test::grid(20, 0.3));
+    const Mesh in = m;
+    RowMatrixXd v = values_of(m, [](const Eigen::Vector3d& p) { return std::sin(6 * p.x()) + p.y(); }, 3);
+    const RowMatrixXd v_in = v;
+    std::vector<uint32_t> to;
+    SimplifyStats st = simplify(m, v, SimplifyOptions{budget}, &to);
+    EXPECT_TRUE(st.warning.empty()) << st.warning;
+    EXPECT_EQ(m.num_faces(), budget);
+    EXPECT_EQ(st.faces_after, budget);
+    ASSERT_EQ(v.rows(), static_cast<Eigen::Index>(m.num_vertices()));
+    for (uint32_t i = 0; i < in.num_vertices(); ++i) {
+      if (to[i] == UINT32_MAX) continue;
+      EXPECT_EQ(m.point(to[i]), in.point(i));  // half-edge collapses move nothing
+      EXPECT_EQ(v.row(to[i]), v_in.row(i));
+    }
+    for (uint32_t s : m.source_face) EXPECT_LT(s, in.num_faces());
+    EXPECT_NEAR(total_area(m), 1.0, 1e-12);  // flat and its outline kept: the area cannot change
+  }
+  // Closed: even counts only, so an odd budget ends one below with a warning.
+  Mesh s = test::build(test::icosphere(3));
+  RowMatrixXd v = values_of(s, [](const Eigen::Vector3d& p) { return p.z(); });
+  SimplifyStats st = simplify(s, v, SimplifyOptions{301});
+  EXPECT_EQ(s.num_faces(), 300u);
+  EXPECT_FALSE(st.warning.empty());
+  // Not below the input: nothing happens.
+  Mesh g = test::build(test::grid(4));
+  RowMatrixXd gv = values_of(g, [](const Eigen::Vector3d& p) { return p.x(); });
+  EXPECT_FALSE(simplify(g, gv, SimplifyOptions{32}).warning.empty());
+  EXPECT_EQ(g.num_faces(), 32u);
+}
+
+TEST(Simplify, GuardsNoFlipsManifoldMinimumAngleBoundariesAndCreases) {
+  // A closed sphere at a tenth of its faces: still closed, manifold, every face facing out.
+  Mesh s = test::build(test::icosphere(4));
+  RowMatrixXd v = values_of(s, [](const Eigen::Vector3d& p) { return p.x() > 0.2 ? 1.0 : 0.0; });
+  SimplifyOptions o{512};
+  o.min_angle_deg = 15;
+  SimplifyStats st = simplify(s, v, o);
+  EXPECT_EQ(s.num_faces(), 512u);
+  EdgeCounts e = position_edges(s);
+  EXPECT_EQ(e.boundary, 0u);
+  EXPECT_EQ(e.non_manifold, 0u);
+  EXPECT_EQ(e.winding_conflicts, 0u);
+  EXPECT_EQ(static_cast<long>(s.positions.rows()) - static_cast<long>(e.edges) + static_cast<long>(s.num_faces()), 2);
+  for (const Triangle& t : s.triangles) {
+    const Eigen::Vector3d a = s.point(t[0]), b = s.point(t[1]), c = s.point(t[2]);
+    EXPECT_GT((b - a).cross(c - a).dot(a + b + c), 0) << "a face turned inwards";
+  }
+  EXPECT_GE(st.min_angle_after_deg, 15.0);  // the input's smallest is above it, so every face is
+  EXPECT_EQ(st.faces_below_min_angle, 0u);
+  // A cube of 6 x 2 x 8 x 8 triangles: its corners are locked, its edges (creases) stay straight
+  // and keep one render vertex per side, so the cube keeps its exact shape.
+  Mesh c = test::build(tessellated_cube(8), 30.0);
+  ASSERT_EQ(c.num_faces(), 768u);
+  RowMatrixXd cv = values_of(c, [](const Eigen::Vector3d& p) { return p.x() * p.y() + p.z(); });
+  st = simplify(c, cv, SimplifyOptions{60});
+  EXPECT_EQ(c.num_faces(), 60u) << st.warning;
+  EXPECT_EQ(st.locked_vertices, 8u);
+  EXPECT_NEAR(total_area(c), 6.0, 1e-12);
+  EXPECT_EQ(position_edges(c).boundary, 0u);
+  for (Eigen::Index p = 0; p < c.positions.rows(); ++p) {  // every position on the cube's surface
+    const Eigen::Vector3d q = c.positions.row(p).transpose();
+    EXPECT_NEAR(std::min(q.minCoeff(), 1 - q.maxCoeff()), 0.0, 1e-15);
+  }
+  for (uint32_t i = 0; i < c.num_vertices(); ++i) {  // normals still those of one side each
+    const Eigen::Vector3d n = c.normals.row(i).transpose();
+    EXPECT_NEAR(n.cwiseAbs().maxCoeff(), 1.0, 1e-12);
+  }
+  std::set<uint32_t> corners;
+  for (uint32_t i = 0; i < c.num_vertices(); ++i) {
+    const Eigen::Vector3d q = c.point(i);
+    if ((q.array() == 0 || q.array() == 1).all()) corners.insert(c.vertex_position[i]);
+  }
+  EXPECT_EQ(corners.size(), 8u);
+}
+
+TEST(Simplify, TheTransferMetricKeepsVerticesWhereTheSignalChanges) {
+  // A flat grid with a sharp shadow edge: the quadric sees nothing to choose between, the signal
+  // metric keeps the vertices that carry the edge. Error: RMS of the output's interpolant
+  // against the signal at points on a fine lattice, located by brute force.
+  auto signal = [](const Eigen::Vector3d& p) { return 1 / (1 + std::exp(-(p.x() + 0.3 * p.y() - 0.6) / 0.03)); };
+  auto rms = [&](SimplifyMetric metric) {
+    Mesh m = test::build(test::grid(40));
+    RowMatrixXd v = values_of(m, signal);
+    SimplifyOptions o{400};
+    o.metric = metric;
+    simplify(m, v, o);
+    EXPECT_EQ(m.num_faces(), 400u);
+    double sum = 0;
+    int n = 0;
+    for (int j = 0; j < 60; ++j)
+      for (int i = 0; i < 60; ++i) {
+        const Eigen::Vector3d p((i + 0.5) / 60, (j + 0.5) / 60, 0);
+        for (const Triangle& t : m.triangles) {
+          const Eigen::Vector3d a = m.point(t[0]), b = m.point(t[1]), c = m.point(t[2]);
+          const double area = (b - a).cross(c - a).z();
+          const double l0 = (b - p).cross(c - p).z() / area, l1 = (c - p).cross(a - p).z() / area, l2 = 1 - l0 - l1;
+          if (l0 < -1e-12 || l1 < -1e-12 || l2 < -1e-12) continue;
+          const double f = l0 * v(t[0], 0) + l1 * v(t[1], 0) + l2 * v(t[2], 0);
+          sum += std::pow(f - signal(p), 2), ++n;
+          break;
+        }
+      }
+    EXPECT_EQ(n, 3600);
+    return std::sqrt(sum / n);
+  };
+  const double transfer = rms(SimplifyMetric::Transfer), geometry = rms(SimplifyMetric::Geometry);
+  EXPECT_LT(transfer, 0.1 * geometry) << transfer << " against " << geometry;
+}
+
+TEST(Simplify, FacesOpenMeshCannotTakeAreKeptAsTheyAre) {
+  // A grid with a fin on one of its interior edges: three faces on that edge.
+  RawMesh r = test::grid(10);
+  const int64_t a = 5 * 11 + 5, c = a + 12;  // the diagonal (5,5)-(6,6)
+  const int64_t top = r.positions.rows();
+  r.positions.conservativeResize(top + 1, 3);
+  r.positions.row(top) << 0.55, 0.55, 0.3;
+  r.face_indices.insert(r.face_indices.end(), {a, c, top});
+  r.face_offsets.push_back(r.face_indices.size());
+  Mesh m = test::build(r);
+  ASSERT_EQ(position_edges(m).non_manifold, 1u);
+  RowMatrixXd v = values_of(m, [](const Eigen::Vector3d& p) { return p.x(); });
+  SimplifyStats st = simplify(m, v, SimplifyOptions{50});
+  EXPECT_EQ(st.kept_faces, 1u);
+  EXPECT_EQ(m.num_faces(), 50u);
+  EXPECT_TRUE(v.allFinite());
+  bool fin = false;
+  for (const Triangle& t : m.triangles)
+    for (uint32_t i : t) fin |= m.point(i).z() > 0.2;
+  EXPECT_TRUE(fin);
+  // Bad options are refused.
+  SimplifyOptions bad{10};
+  bad.min_angle_deg = 70;
+  EXPECT_THROW(simplify(m, v, bad), InputError);
+  RowMatrixXd wrong(3, 1);
+  EXPECT_THROW(simplify(m, wrong, SimplifyOptions{10}), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub
