@@ -70,7 +70,7 @@ struct CompareCli {
   std::string out_dir, budgets = "", estimates = "relative,shadow,curvature,length,probe,root", frame_size = "480,360";
   std::vector<std::string> lights;
   int max_levels = 4, eval_points = 20000, frame_rays = 256;
-  bool pareto = false;
+  bool pareto = false, simplify = false;
   std::string grid_rays = "64,256,1024", grid_samples = "0,4,16,64", grid_sample_rays = "4,16,64", targets;
 
   void add(ArgParser& args) {
@@ -85,6 +85,8 @@ struct CompareCli {
     args.option("--light", "SPEC", "light of the frames [default sky and sun:1,3,2]", &lights);
     args.option("--frame-size", "W,H", "frame size [default 480,360]", &frame_size);
     args.option("--frame-rays", "R", "rays per pixel of the reference frame", &frame_rays, 1, 1 << 20);
+    args.flag("--simplify", "also simplify to 50%, 25% and 10% of the input's triangles, ranked by the transfer and by the "
+              "geometry alone (rows 'simplify transfer' and 'simplify geometry', judged by closest point)", &simplify);
     args.flag("--pareto", "also bake the input unrefined under a grid of fixed settings, the default and --error targets: "
               "error against bake seconds (DIR/pareto.csv, pareto.json)", &pareto);
     args.option("--grid-rays", "R1,R2,...", "pareto: rays per vertex [default 64,256,1024]", &grid_rays);
@@ -124,8 +126,8 @@ struct CompareCli {
 // uniform count and every budget, under every estimate. Returns the runs and the triangle
 // count the frames are shown at (uniform level 3, or the first budget).
 std::vector<BakeOptions> plan_runs(const BakeOptions& base, size_t source_faces, const std::vector<size_t>& budgets,
-                                   const std::vector<EdgeEstimate>& estimates, int max_levels, size_t& frame_count) {
-  const size_t largest = *std::max_element(budgets.begin(), budgets.end());
+                                   const std::vector<EdgeEstimate>& estimates, int max_levels, bool simplify, size_t& frame_count) {
+  const size_t largest = budgets.empty() ? 0 : *std::max_element(budgets.begin(), budgets.end());
   std::vector<BakeOptions> plan{base};
   std::vector<size_t> counts = budgets;
   frame_count = 0;
@@ -138,7 +140,7 @@ std::vector<BakeOptions> plan_runs(const BakeOptions& base, size_t source_faces,
     counts.push_back(count);
     if (k == std::min(3, max_levels)) frame_count = count;
   }
-  if (frame_count == 0) frame_count = budgets.front();
+  if (frame_count == 0) frame_count = budgets.empty() ? source_faces : budgets.front();
   std::sort(counts.begin(), counts.end());
   counts.erase(std::unique(counts.begin(), counts.end()), counts.end());
   for (size_t count : counts)
@@ -150,6 +152,13 @@ std::vector<BakeOptions> plan_runs(const BakeOptions& base, size_t source_faces,
       if (e != BakeOptions{}.estimate) a.fit.method = FitMethod::Point;
       plan.push_back(a);
     }
+  if (simplify)
+    for (size_t share : {50, 25, 10})
+      for (SimplifyMetric m : {SimplifyMetric::Transfer, SimplifyMetric::Geometry}) {
+        BakeOptions a = base;
+        a.refine = Refinement::Adaptive, a.adaptive.budget = std::max<size_t>(1, source_faces * share / 100), a.simplify.metric = m;
+        plan.push_back(a);
+      }
   return plan;
 }
 
@@ -160,10 +169,12 @@ std::vector<Row> evaluate_run(const BakeOptions& s, const BakeResult& r, const R
   if (s.fit.method != FitMethod::Point) values.push_back({fit_method_name(s.fit.method), &r.transfer});
   std::vector<Row> rows;
   for (const auto& [fit, v] : values) {
-    const EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, *v);
+    // A simplified mesh's faces do not lie in the source's: its points are located by closest point.
+    const EvalResult e = r.simplified ? evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, *v, s.transfer.threads)
+                                      : evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, *v);
     Row row;
-    row.method = refinement_name(s.refine);
-    row.estimate = s.refine == Refinement::Adaptive ? estimate_name(s.estimate) : "";
+    row.method = r.simplified ? "simplify" : refinement_name(s.refine);
+    row.estimate = r.simplified ? simplify_metric_name(s.simplify.metric) : s.refine == Refinement::Adaptive ? estimate_name(s.estimate) : "";
     row.fit = fit;
     row.triangles = r.mesh.num_faces();
     row.vertices = r.mesh.num_vertices();
@@ -288,7 +299,8 @@ std::vector<PlotSeries> series_of(const std::vector<Row>& rows, bool by_time) {
   std::vector<PlotSeries> out;
   for (const Row& r : rows) {
     if (r.method == "none") continue;
-    const std::string name = (r.method == "adaptive" ? "adaptive " + r.estimate : r.method) + (r.fit == "point" ? "" : " " + r.fit);
+    const std::string name = (r.method == "adaptive" || r.method == "simplify" ? r.method + " " + r.estimate : r.method) +
+                             (r.fit == "point" ? "" : " " + r.fit);
     auto it = std::find_if(out.begin(), out.end(), [&](const PlotSeries& s) { return s.name == name; });
     if (it == out.end()) it = out.insert(out.end(), PlotSeries{name, {}, true, 4, false});
     it->points.push_back({by_time ? r.seconds : double(r.triangles), r.rms});
@@ -370,7 +382,7 @@ int cmd_compare(int argc, char** argv) {
                  "--error targets, and shows each against the grid's best error at the same bake time.");
   c.add(args);
   if (!args.parse(argc, argv, 2)) return 0;
-  if (c.budgets.empty() && !c.pareto) throw UsageError("compare: missing --budgets T1,T2,... (or --pareto)");
+  if (c.budgets.empty() && !c.pareto && !c.simplify) throw UsageError("compare: missing --budgets T1,T2,... (or --pareto, --simplify)");
   if (c.out_dir.empty()) throw UsageError("compare: missing -o DIR");
   const std::vector<size_t> budgets = c.budgets.empty() ? std::vector<size_t>() : parse_budgets(c.budgets);
   const ParetoSpec pareto = c.pareto_spec();
@@ -411,7 +423,7 @@ int cmd_compare(int argc, char** argv) {
 
   size_t frame_count = 0;
   const std::vector<BakeOptions> plan =
-      budgets.empty() ? std::vector<BakeOptions>() : plan_runs(base, source.num_faces(), budgets, estimates, c.max_levels, frame_count);
+      budgets.empty() && !c.simplify ? std::vector<BakeOptions>() : plan_runs(base, source.num_faces(), budgets, estimates, c.max_levels, c.simplify, frame_count);
   std::vector<Row> rows;
   std::map<std::string, BakeResult> keep;  // runs whose frames the page shows
   for (size_t i = 0; i < plan.size(); ++i) {
@@ -423,7 +435,7 @@ int cmd_compare(int argc, char** argv) {
                   row.method.c_str(), row.estimate.c_str(), row.fit.c_str(), row.triangles, row.rms, row.p95, row.seconds);
       std::fflush(stdout);
     }
-    if (r.mesh.num_faces() == frame_count && (s.refine == Refinement::Uniform || s.estimate == BakeOptions{}.estimate)) {
+    if (!r.simplified && r.mesh.num_faces() == frame_count && (s.refine == Refinement::Uniform || s.estimate == BakeOptions{}.estimate)) {
       const std::string key = s.refine == Refinement::Uniform ? "uniform" : std::string("adaptive ") + estimate_name(s.estimate);
       keep.emplace(key, std::move(r));
     }

@@ -92,6 +92,8 @@ void BakeCli::add_refinement(ArgParser& args) {
               "geometry alone", &bake.simplify.metric, {SimplifyMetric::Transfer, SimplifyMetric::Geometry}, simplify_metric_name);
   args.option("--min-angle", "A", "adaptive below the input: no collapse makes a face with an angle below A degrees",
               &bake.simplify.min_angle_deg, 0.0, 59.0);
+  args.option("--geometry-weight", "W", "adaptive below the input, transfer metric: weight of the quadric against the transfer's change",
+              &bake.simplify.geometry_weight, 0.0, 1e12);
   args.option("--simplify-alpha", "A", "adaptive below the input: the fit's regulariser weight there (--alpha is the others')",
               &bake.simplified_alpha, 0.0, 1e12);
   args.choice("--estimate", "adaptive: edge error estimate", &bake.estimate,

@@ -151,6 +151,10 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
       r.set("min_angle_after_deg", st.min_angle_after_deg);
       r.set("faces_below_min_angle", st.faces_below_min_angle);
       r.set("seconds_simplify", st.seconds);
+      r.set("refused_flip", st.refused_flip);
+      r.set("refused_angle", st.refused_angle);
+      r.set("refused_line", st.refused_line);
+      r.set("refused_crease_side", st.refused_crease_side);
     } else {
       record(r, res.refine);
     }
@@ -217,7 +221,9 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"  simplify:   to the budget, metric {simplify_metric}: {collapses} half-edge collapses (OpenMesh's Decimater), "
                      "{locked_vertices} vertices locked (crease corners and ends), {kept_faces} faces kept as they were",
                      "              min angle {min_angle_after_deg:3}° after ({faces_below_min_angle} faces below "
-                     "{simplify_min_angle_deg:1}°, none made by a collapse); {seconds_simplify:3} s"});
+                     "{simplify_min_angle_deg:1}°, none worse than the faces a collapse replaced); {seconds_simplify:3} s",
+                     "              guards refused (per evaluation): {refused_flip} flips, {refused_angle} angles, "
+                     "{refused_line} boundary or feature lines, {refused_crease_side} crease sides"});
   else if (adaptive)
     r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
                      "{pre_refinement_splits} pre-refinement) in {batches} batches",

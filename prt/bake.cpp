@@ -220,58 +220,55 @@ void simplify_adaptively(const BakeOptions& o, BakeResult& r) {
 // shading the asset must reproduce, never a point inside the original geometry), each located
 // on the simplified surface by its closest point and weighted by that face's area over its
 // count. As many samples as the fit would give the output's faces; faces that none reaches take
-// the prior's interpolant. Not weighed by noise: a surviving vertex's traced value speaks for
-// its point, not for the patch of source surface its faces now stand for.
+// the prior's interpolant. The samples keep their source points, normals and offsets (what is
+// traced) with the simplified face's barycentrics (what the fit needs), so they are traced and
+// reduced to face moments in one streaming pass, as every other fit's are. Not weighed by noise:
+// a surviving vertex's traced value speaks for its point, not for the patch of source surface
+// its faces now stand for.
 void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock,
                    BakeResult& r) {
-  SampleOptions so = o.samples;
-  so.min_per_triangle = 0;
-  if (so.density <= 0) so.per_triangle *= double(r.mesh.num_faces()) / double(std::max<size_t>(source.num_faces(), 1));
-  const SurfaceSamples on_source = make_surface_samples(source, so);
+  SurfaceSamples s;
+  {
+    SampleOptions so = o.samples;
+    so.min_per_triangle = 0;
+    if (so.density <= 0) so.per_triangle *= double(r.mesh.num_faces()) / double(std::max<size_t>(source.num_faces(), 1));
+    const SurfaceSamples on_source = make_surface_samples(source, so);
+    const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads);
+    // Group by the face they landed on (a counting sort keeps the source order within a face).
+    const size_t F = r.mesh.num_faces(), S = at.size();
+    s.begin.assign(F + 1, 0);
+    for (const SurfaceLocation& l : at) ++s.begin[l.face + 1];
+    for (size_t f = 0; f < F; ++f) s.begin[f + 1] += s.begin[f];
+    std::vector<size_t> next(s.begin.begin(), s.begin.end() - 1), order(S);
+    for (size_t k = 0; k < S; ++k) order[next[at[k].face]++] = k;
+    s.points.resize(Eigen::Index(S), 3), s.normals.resize(Eigen::Index(S), 3), s.offsets.resize(Eigen::Index(S), 3);
+    s.barycentric.resize(Eigen::Index(S), 3);
+    s.face.resize(S), s.weight.resize(S);
+    s.interpolated.assign(F, 0);
+    for (size_t j = 0; j < S; ++j) {
+      const Eigen::Index row = Eigen::Index(j), from = Eigen::Index(order[j]);
+      s.face[j] = at[order[j]].face;
+      s.barycentric.row(row) = at[order[j]].barycentric.transpose();
+      s.points.row(row) = on_source.points.row(from);
+      s.normals.row(row) = on_source.normals.row(from);
+      s.offsets.row(row) = on_source.offsets.row(from);
+    }
+    for (size_t f = 0; f < F; ++f) {
+      const size_t n = s.begin[f + 1] - s.begin[f];
+      const Triangle& t = r.mesh.triangles[f];
+      const double area = triangle_area(r.mesh.point(t[0]), r.mesh.point(t[1]), r.mesh.point(t[2]));
+      if (n == 0) s.interpolated[f] = 1;
+      for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) s.weight[k] = area / double(n);
+    }
+  }
   TransferOptions to = o.transfer;
   to.rays = o.sample_rays;
   to.seed = mix64(o.transfer.seed ^ 0x5A3D1E5ull);
   to.stream_offset = 0;
-  if (progress.stage) progress.stage("samples", on_source.size());
+  if (progress.stage) progress.stage("samples", s.size());
   TransferStats stats;
-  const RowMatrixXd values = shadowed_transfer(scene, on_source.points, on_source.normals, to, &stats, progress.add, &on_source.offsets);
-  const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads);
-  // Group by the face they landed on (a counting sort keeps the source order within a face).
-  const size_t F = r.mesh.num_faces(), S = at.size();
-  SurfaceSamples s;
-  s.begin.assign(F + 1, 0);
-  for (const SurfaceLocation& l : at) ++s.begin[l.face + 1];
-  for (size_t f = 0; f < F; ++f) s.begin[f + 1] += s.begin[f];
-  std::vector<size_t> next(s.begin.begin(), s.begin.end() - 1), order(S);
-  for (size_t k = 0; k < S; ++k) order[next[at[k].face]++] = k;
-  s.points.resize(Eigen::Index(S), 3), s.normals.resize(Eigen::Index(S), 3), s.offsets.resize(Eigen::Index(S), 3);
-  s.barycentric.resize(Eigen::Index(S), 3);
-  s.face.resize(S), s.weight.resize(S);
-  s.interpolated.assign(F, 0);
-  RowMatrixXd sorted(Eigen::Index(S), values.cols());
-  for (size_t j = 0; j < S; ++j) {
-    const SurfaceLocation& l = at[order[j]];
-    const Triangle& t = r.mesh.triangles[l.face];
-    const Eigen::Index row = Eigen::Index(j);
-    s.face[j] = l.face;
-    s.barycentric.row(row) = l.barycentric.transpose();
-    s.points.row(row) = (l.barycentric[0] * r.mesh.point(t[0]) + l.barycentric[1] * r.mesh.point(t[1]) + l.barycentric[2] * r.mesh.point(t[2])).transpose();
-    Eigen::Vector3d n = (l.barycentric[0] * r.mesh.normals.row(t[0]) + l.barycentric[1] * r.mesh.normals.row(t[1]) +
-                         l.barycentric[2] * r.mesh.normals.row(t[2])).transpose();
-    if (!(n.norm() > 0)) n = r.mesh.normals.row(t[0]).transpose();
-    s.normals.row(row) = n.normalized().transpose();
-    s.offsets.row(row) = s.normals.row(row);
-    sorted.row(row) = values.row(Eigen::Index(order[j]));
-  }
-  for (size_t f = 0; f < F; ++f) {
-    const size_t n = s.begin[f + 1] - s.begin[f];
-    const Triangle& t = r.mesh.triangles[f];
-    const double area = triangle_area(r.mesh.point(t[0]), r.mesh.point(t[1]), r.mesh.point(t[2]));
-    if (n == 0) s.interpolated[f] = 1;
-    for (size_t k = s.begin[f]; k < s.begin[f + 1]; ++k) s.weight[k] = area / double(n);
-  }
   r.fit_data.allocation = SampleAllocation::Area;
-  r.fit_data.moments = face_moments(r.mesh, s, sorted);
+  r.fit_data.moments = trace_face_moments(r.mesh, scene, s, to, &stats, progress.add);
   r.fit_data.samples = std::move(s);
   r.fit_data.rays = stats.rays;
   r.rays += stats.rays;

@@ -17,7 +17,9 @@ struct SampleOptions {
 
 //! Samples grouped by triangle: face f's samples are rows begin[f] .. begin[f+1]-1.
 struct SurfaceSamples {
-  RowMatrixX3d points;       //!< #S by 3, on the surface
+  //! #S by 3, on the surface (a simplified mesh's fit: on the source surface, where they are
+  //! traced; `barycentric` then locates each at its closest point on the mesh)
+  RowMatrixX3d points;
   RowMatrixX3d normals;      //!< #S by 3, interpolated render-vertex normals, unit
   RowMatrixX3d offsets;      //!< #S by 3, unit directions to move ray origins off the surface
   RowMatrixX3d barycentric;  //!< #S by 3, weights of the face's corners

@@ -70,6 +70,7 @@ struct State {
   std::vector<std::array<uint32_t, 3>> corner_pos, corner_render;  // per OpenMesh face, our corner order
   std::vector<uint32_t> source;                                     // per OpenMesh face
   std::vector<char> feature;                                        // per OpenMesh edge
+  size_t refused_flip = 0, refused_angle = 0, refused_line = 0, refused_side = 0;  // evaluations refused
 
   uint32_t render_at(FaceHandle f, VertexHandle v) const {
     const auto& p = corner_pos[size_t(f.idx())];
@@ -79,15 +80,17 @@ struct State {
   }
 };
 
-// Smallest-angle cosine test: false if any corner of (a, b, c) is below the minimum angle.
-bool angles_ok(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double cos_min) {
+// The largest corner-angle cosine of (a, b, c): its smallest angle's cosine (1 without area).
+double max_cosine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector3d p[3] = {a, b, c};
+  double worst = -1;
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
     const double n = u.norm() * w.norm();
-    if (!(n > 0) || u.dot(w) / n > cos_min) return false;
+    if (!(n > 0)) return 1;
+    worst = std::max(worst, u.dot(w) / n);
   }
-  return true;
+  return worst;
 }
 
 // Distance of p from the segment [a, b].
@@ -106,10 +109,15 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
   DECIMATER_MODNAME(PrtsubTransfer)
 
   explicit ModTransfer(OMesh& mesh) : Base(mesh, false) {}
+  static float refuse(size_t& count) {
+    ++count;
+    return float(ILLEGAL_COLLAPSE);
+  }
   void set_state(State* s) { s_ = s; }
 
   float collapse_priority(const CollapseInfo& ci) override {
-    if (!sides(ci)) return float(ILLEGAL_COLLAPSE);
+    worst_for_ = HalfedgeHandle();
+    if (!sides(ci)) return refuse(s_->refused_side);
     const OMesh& m = Base::mesh();
     const Eigen::Vector3d p0 = vec(ci.p0), p1 = vec(ci.p1);
     const Eigen::Index K = s_->values->cols();
@@ -122,8 +130,10 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
       const int ka = (k0 + 1) % 3, kb = (k0 + 2) % 3;
       const Eigen::Vector3d pa = vec(m.point(VertexHandle(int(pos[ka])))), pb = vec(m.point(VertexHandle(int(pos[kb]))));
       const Eigen::Vector3d n0 = (pa - p0).cross(pb - p0), n1 = (pa - p1).cross(pb - p1);
-      if (!(n0.dot(n1) > 0)) return float(ILLEGAL_COLLAPSE);  // flipped, or no area left
-      if (!angles_ok(p1, pa, pb, s_->cos_min_angle)) return float(ILLEGAL_COLLAPSE);
+      if (!(n0.dot(n1) > 0)) return refuse(s_->refused_flip);  // flipped, or no area left
+      // Below the minimum angle only where the faces it replaces were already worse (a needle of
+      // the input may be collapsed into something better, never into something worse).
+      if (const double c = max_cosine(p1, pa, pb); c > s_->cos_min_angle && c > worst_before(ci)) return refuse(s_->refused_angle);
       const double area1 = 0.5 * n1.norm();
       if (K > 0) {
         // L_t(p0): t's interpolant extended with its constant gradient (least-squares barycentrics).
@@ -147,7 +157,7 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
       const double area = face_area(*f);
       if (n.norm() > 0) e_geom += area * std::pow((p1 - p0).dot(n.normalized()), 2);
     }
-    if (!lines_ok(ci)) return float(ILLEGAL_COLLAPSE);
+    if (!lines_ok(ci)) return refuse(s_->refused_line);
     const double d2 = s_->diagonal * s_->diagonal;
     const double scale2 = s_->options.value_scale * s_->options.value_scale;
     const double e = s_->options.metric == SimplifyMetric::Geometry || K == 0
@@ -173,6 +183,19 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
     const OMesh& m = Base::mesh();
     return triangle_area(vec(m.point(VertexHandle(int(p[0])))), vec(m.point(VertexHandle(int(p[1])))),
                          vec(m.point(VertexHandle(int(p[2])))));
+  }
+
+  // The smallest angle's cosine over the faces around v0 (those the collapse changes or removes).
+  double worst_before(const CollapseInfo& ci) {
+    if (worst_for_ == ci.v0v1) return worst_;
+    const OMesh& m = Base::mesh();
+    worst_ = -1, worst_for_ = ci.v0v1;
+    for (OMesh::ConstVertexFaceIter f = m.cvf_iter(ci.v0); f.is_valid(); ++f) {
+      const auto& p = s_->corner_pos[size_t(f->idx())];
+      worst_ = std::max(worst_, max_cosine(vec(m.point(VertexHandle(int(p[0])))), vec(m.point(VertexHandle(int(p[1])))),
+                                           vec(m.point(VertexHandle(int(p[2]))))));
+    }
+    return worst_;
   }
 
   // Fills changed_ with the faces around v0 other than fl and fr, each with the render vertex of
@@ -232,6 +255,8 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
   }
 
   State* s_ = nullptr;
+  double worst_ = -1;
+  HalfedgeHandle worst_for_;  // worst_ is of this collapse (cleared by every priority call)
   std::vector<std::pair<FaceHandle, uint32_t>> changed_;
   std::vector<std::pair<FaceHandle, int>> ring_;
   std::vector<FaceHandle> stack_;
@@ -411,6 +436,8 @@ SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& o
   values = std::move(vals);
   if (removed_to) *removed_to = std::move(render_to);
 
+  stats.refused_flip = s.refused_flip, stats.refused_angle = s.refused_angle, stats.refused_line = s.refused_line;
+  stats.refused_crease_side = s.refused_side;
   stats.faces_after = mesh.num_faces();
   stats.min_angle_after_deg = min_angle_deg(mesh);
   for (double a : face_min_angles_deg(mesh)) stats.faces_below_min_angle += a < options.min_angle_deg;
