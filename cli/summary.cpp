@@ -155,6 +155,8 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
       r.set("refused_angle", st.refused_angle);
       r.set("refused_line", st.refused_line);
       r.set("refused_crease_side", st.refused_crease_side);
+      r.set("refused_surface", st.refused_surface);
+      r.set("surface_tolerance_percent", 100 * st.surface_tolerance);
     } else {
       record(r, res.refine);
     }
@@ -223,7 +225,8 @@ void print_bake_summary(const Report& r) {
                      "              min angle {min_angle_after_deg:3}° after ({faces_below_min_angle} faces below "
                      "{simplify_min_angle_deg:1}°, none worse than the faces a collapse replaced); {seconds_simplify:3} s",
                      "              guards refused (per evaluation): {refused_flip} flips, {refused_angle} angles, "
-                     "{refused_line} boundary or feature lines, {refused_crease_side} crease sides"});
+                     "{refused_line} boundary or feature lines, {refused_crease_side} crease sides, {refused_surface} "
+                     "surface moves (tolerance reached {surface_tolerance_percent:2}% of the diagonal)"});
   else if (adaptive)
     r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
                      "{pre_refinement_splits} pre-refinement) in {batches} batches",

@@ -31,17 +31,21 @@ struct SimplifyOptions {
   //! no collapse moves a boundary or a crease / UV-seam line by more than this share of the
   //! bounding-box diagonal
   double feature_tolerance = 1e-3;
+  //! no collapse puts the kept vertex further than this share of the diagonal off the plane of
+  //! a face the removed one had; while the budget is not reached it doubles, up to the maximum
+  double surface_tolerance = 5e-3, max_surface_tolerance = 0.04;
 };
 
 struct SimplifyStats {
   size_t faces_before = 0, faces_after = 0, collapses = 0;
+  double surface_tolerance = 0;  //!< the share of the diagonal the surface tolerance ended at
   size_t locked_vertices = 0;    //!< crease corners, ends and non-manifold faces' vertices: never removed
   size_t kept_faces = 0;         //!< faces OpenMesh could not take (non-manifold, repeated corners): kept as they are
   double min_angle_after_deg = 0;
   size_t faces_below_min_angle = 0;  //!< after: none worse than the faces a collapse replaced
   //! collapses the guards refused, counted per evaluation (the decimater asks again as the
   //! neighbourhood changes): a face flipped, an angle, a boundary or feature line, a crease side
-  size_t refused_flip = 0, refused_angle = 0, refused_line = 0, refused_crease_side = 0;
+  size_t refused_flip = 0, refused_angle = 0, refused_line = 0, refused_crease_side = 0, refused_surface = 0;  //!< surface: moving it beyond the tolerance
   double seconds = 0;
   std::string warning;  //!< non-empty when the budget could not be met exactly, and why
 };
@@ -49,9 +53,10 @@ struct SimplifyStats {
 //! Simplifies `mesh` and its #V by K `values` to `options.budget` triangles with OpenMesh's
 //! Decimater and a module of ours. Collapses are half-edge collapses: every surviving vertex
 //! keeps its position, normal, UVs and value (traced transfer stays valid). Guards, each a reason
-//! to refuse a collapse: a face's normal turning by more than 90°, a new face below
+//! to refuse a collapse: a face's normal flipping, a new face below
 //! min_angle_deg (unless the faces it replaces were worse: an input's needle may be collapsed
-//! into something better), a boundary or feature line moving by more than feature_tolerance, and
+//! into something better), the kept vertex lying off a removed face's plane by more than the surface tolerance
+//! (doubled, up to its maximum, while the budget is not reached), a boundary or feature line moving by more than feature_tolerance, and
 //! OpenMesh's own link condition (so a manifold input stays manifold). Creases and UV seams
 //! (position edges whose faces do not share render vertices) are features: their vertices only
 //! slide along them, and where three or more meet, or one ends, the vertex is locked. Each

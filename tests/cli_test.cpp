@@ -335,7 +335,7 @@ TEST_F(Cli, ABudgetBelowTheInputSimplifiesAndEvalLocatesItsPointsByClosestPoint)
   const std::string in = dir.path("dense.obj"), asset = dir.path("s.ply");
   test::write_obj(in, test::merge(test::icosphere(2), test::transformed(test::grid(8), 5.0, Eigen::Vector3d(-2.5, -2.5, -1))));
   testing::internal::CaptureStdout();
-  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "16", "--refine", "adaptive", "--budget", "101", "--report", dir.path("b.json")}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "16", "--refine", "adaptive", "--budget", "100", "--report", dir.path("b.json")}), 0);
   ASSERT_EQ(run({"eval", asset, "--source", in, "--points", "500", "--report", dir.path("e.json")}), 0);
   ASSERT_EQ(run({"compare", in, "--simplify", "--rays", "8", "--eval-points", "300", "--frame-size", "64,48", "--frame-rays", "4",
                  "-o", dir.path("cmp")}),
@@ -344,18 +344,19 @@ TEST_F(Cli, ABudgetBelowTheInputSimplifiesAndEvalLocatesItsPointsByClosestPoint)
   EXPECT_NE(out.find("  simplify:   to the budget, metric transfer:"), std::string::npos) << out;
   EXPECT_NE(out.find("located by closest point (a simplified asset)"), std::string::npos) << out;
   const Asset a = read_asset(asset);
-  EXPECT_EQ(a.triangles.size(), 101u);  // 320 + 128 triangles, exact: the plane has a boundary
+  EXPECT_EQ(a.triangles.size(), 100u);  // of 320 + 128 triangles
   bool simplified = false;
-  for (const auto& [k, v] : a.metadata) simplified |= k == "simplified" && v.find("448 -> 101 triangles, metric transfer") == 0;
+  for (const auto& [k, v] : a.metadata) simplified |= k == "simplified" && v.find("448 -> 100 triangles, metric transfer") == 0;
   EXPECT_TRUE(simplified);
   const std::string b = read_file_bytes(dir.path("b.json"));
   for (const char* key : {"\"simplified\": true", "\"collapses\"", "\"locked_vertices\"", "\"refused_flip\"", "\"seconds_simplify\""})
     EXPECT_NE(b.find(key), std::string::npos) << key;
   EXPECT_NE(read_file_bytes(dir.path("e.json")).find("\"location\": \"closest point"), std::string::npos);
-  // compare --simplify: 50%, 25% and 10% under each metric, point and fitted, besides the input's own rows.
+  // compare --simplify: 50%, 25% and 10% under each metric, point and fitted, besides the input's own rows
+  // (10% is out of reach of the guards on so small a mesh: 56 and 68 triangles, stated by the bakes).
   const std::string csv = read_file_bytes(dir.path("cmp/results.csv"));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 + 12) << csv;
-  for (const char* row : {"simplify,transfer,lsq,224,", "simplify,geometry,lsq,224,", "simplify,transfer,lsq,44,", "simplify,geometry,point,112,"})
+  for (const char* row : {"simplify,transfer,lsq,224,", "simplify,geometry,lsq,224,", "simplify,transfer,lsq,56,", "simplify,geometry,point,112,"})
     EXPECT_NE(csv.find(row), std::string::npos) << row << "\n" << csv;
 }
 
