@@ -17,8 +17,12 @@
 // distance of the paper's equation 5 is the coefficient distance. Priority:
 //   E_signal / value_scale² + geometry_weight · E_geom / diagonal²   (Geometry: E_geom alone).
 // The same module refuses collapses that flip a face (its normal turns by 90° or more), make a
-// face below the minimum angle or without area, or move a boundary or feature line by more than
-// its tolerance (the distance of v0 from the line that replaces its two line edges).
+// face below the minimum angle (unless the faces replaced were worse) or without area, put v1
+// off the plane of one of v0's faces by more than the surface tolerance, or move a boundary or
+// feature line by more than its tolerance (the distance of v0 from the line that replaces its
+// two line edges). Where the budget is out of reach, the surface tolerance doubles (up to its
+// maximum), and that relaxed run is kept only if it gets at least halfway from where the strict
+// run stopped.
 //
 // A collapse removes two faces, or one on a boundary, so the Decimater is run to budget + 1;
 // if it stops there, one boundary collapse (the best legal one) ends exactly on the budget; a
