@@ -114,6 +114,9 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "refine") o.refine = parse_refinement(value.cast<std::string>());
     else if (key == "budget") o.adaptive.budget = value.cast<size_t>();
     else if (key == "levels") o.uniform.levels = value.cast<int>();
+    else if (key == "simplify_metric") o.simplify.metric = parse_simplify_metric(value.cast<std::string>());
+    else if (key == "min_angle") o.simplify.min_angle_deg = value.cast<double>();
+    else if (key == "simplify_alpha") o.simplified_alpha = value.cast<double>();
     else if (key == "error") o.target_error = value.cast<double>();
     else if (key == "sample_rays") o.sample_rays = value.cast<int>();
     else if (key == "bounces") {
@@ -123,7 +126,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, error, sample_rays, bounces, albedo, source)");
+                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
   }
   if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw InputError("refine='adaptive' needs budget=T triangles");
   return o;
@@ -278,8 +281,8 @@ PYBIND11_MODULE(prtsub, m) {
       }, py::arg("mesh_or_vertices"), py::arg("faces") = py::none(),
       "bake(vertices, faces, **options) or bake(mesh, **options): the whole pipeline, as `prtsub bake`.\n"
       "Options: order, rays, seed, threads, signal ('transfer'|'ao'), fit ('point'|'average'|'lsq'), alpha,\n"
-      "refine ('none'|'adaptive'|'uniform'), budget, levels, error (target %), sample_rays, bounces (N or 'auto'),\n"
-      "albedo, source.");
+      "refine ('none'|'adaptive'|'uniform'), budget (below the input's count: simplify), levels, simplify_metric\n"
+      "('transfer'|'geometry'), min_angle, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo, source.");
 
   m.def("load", [](const std::string& path) {
         const Asset in = read_asset(path);

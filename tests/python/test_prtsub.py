@@ -28,6 +28,39 @@ def box_on_ground():
     return vertices, np.array(faces, dtype=np.int64)
 
 
+def icosphere_on_ground():
+    """A level-2 icosphere (320 triangles) resting on a 2x2-cell ground grid: enough faces to simplify."""
+    t = (1 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    v = [tuple(c / math.sqrt(sum(x * x for x in p)) for c in p) for p in v]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6), (7, 1, 8),
+         (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(2):
+        mid, g = {}, []
+        def m(a, b):
+            k = (min(a, b), max(a, b))
+            if k not in mid:
+                p = [(x + y) / 2 for x, y in zip(v[a], v[b])]
+                n = math.sqrt(sum(x * x for x in p))
+                v.append(tuple(x / n for x in p))
+                mid[k] = len(v) - 1
+            return mid[k]
+        for a, b, c in f:
+            ab, bc, ca = m(a, b), m(b, c), m(c, a)
+            g += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = g
+    n = len(v)
+    for j in range(3):
+        for i in range(3):
+            v.append((-3 + 3 * i, -1, -3 + 3 * j))
+    for j in range(2):
+        for i in range(2):
+            a = n + 3 * j + i
+            f += [(a, a + 3, a + 4), (a, a + 4, a + 1)]  # facing +y
+    return np.array(v, dtype=np.float64), np.array(f, dtype=np.int64)
+
+
 def write_obj(path, vertices, faces):
     with open(path, "w") as f:
         for v in vertices:
@@ -122,6 +155,20 @@ class BakeTest(unittest.TestCase):
         direct = prtsub.bake(self.vertices, self.faces, order=2, rays=32, fit="point")
         self.assertEqual(ours.stats["bounces"], 2)
         self.assertGreater(ours.transfer[:, 0].sum(), direct.transfer[:, 0].sum())
+
+    def test_a_budget_below_the_input_simplifies_as_the_tool_does(self):
+        sphere = prtsub.mesh(*icosphere_on_ground())
+        write_obj(self.path("s.obj"), *icosphere_on_ground())
+        ours = prtsub.bake(sphere, rays=16, refine="adaptive", budget=150, min_angle=10)
+        subprocess.run([BINARY, "bake", self.path("s.obj"), "-o", self.path("s.ply"), "--rays", "16", "--refine", "adaptive",
+                        "--budget", "150", "--min-angle", "10"], check=True, capture_output=True)
+        tool = prtsub.load(self.path("s.ply"))
+        self.assertEqual(len(ours.faces), 150)
+        np.testing.assert_array_equal(ours.faces, tool.faces)
+        np.testing.assert_allclose(ours.transfer, tool.transfer, rtol=0, atol=1e-6)
+        self.assertTrue(any(k == "simplified" for k, _ in ours.metadata))
+        with self.assertRaises(prtsub.InputError):
+            prtsub.bake(sphere, refine="adaptive", budget=100, simplify_metric="sideways")
 
     def test_errors_are_the_tools_one_line_messages(self):
         with open(self.path("bad.obj"), "w") as f:
