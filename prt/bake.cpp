@@ -22,6 +22,7 @@
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/vertex_top_up.h"
+#include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
 #include "prtsub/version.h"
@@ -236,11 +237,9 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
     const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads);
     // Group by the face they landed on (a counting sort keeps the source order within a face).
     const size_t F = r.mesh.num_faces(), S = at.size();
-    s.begin.assign(F + 1, 0);
-    for (const SurfaceLocation& l : at) ++s.begin[l.face + 1];
-    for (size_t f = 0; f < F; ++f) s.begin[f + 1] += s.begin[f];
-    std::vector<size_t> next(s.begin.begin(), s.begin.end() - 1), order(S);
-    for (size_t k = 0; k < S; ++k) order[next[at[k].face]++] = k;
+    const Buckets by_face = bucket_sort(F, S, 1, [&](size_t k, uint32_t) { return at[k].face; });
+    s.begin.assign(by_face.begin.begin(), by_face.begin.end());
+    const std::vector<uint32_t>& order = by_face.entry;
     s.points.resize(Eigen::Index(S), 3), s.normals.resize(Eigen::Index(S), 3), s.offsets.resize(Eigen::Index(S), 3);
     s.barycentric.resize(Eigen::Index(S), 3);
     s.face.resize(S), s.weight.resize(S);

@@ -79,6 +79,19 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
 
 namespace {
 
+// ‖g(p) − t_ref(p)‖ over the first K coefficients: the asset's transfer interpolated in face t
+// with weights w, against reference row i.
+double interpolation_error(const RowMatrixXd& transfer, const Triangle& t, const Eigen::Vector3d& w, const RowMatrixXd& reference,
+                           Eigen::Index i, int K) {
+  double e2 = 0;
+  for (int k = 0; k < K; ++k) {
+    const double g = w[0] * transfer(t[0], k) + w[1] * transfer(t[1], k) + w[2] * transfer(t[2], k);
+    const double d = g - reference(i, k);
+    e2 += d * d;
+  }
+  return std::sqrt(e2);
+}
+
 // RMS and 95th percentile of the points' errors (relative), in percent.
 void summarize(std::vector<double>& err, EvalResult& r) {
   r.points = err.size();
@@ -134,14 +147,7 @@ EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const s
     // nearest barycentrics.
     Eigen::Vector3d w = best_w.cwiseMax(0.0);
     w /= w.sum();
-    const Triangle& t = triangles[best];
-    double e2 = 0;
-    for (int k = 0; k < K; ++k) {
-      const double g = w[0] * transfer(t[0], k) + w[1] * transfer(t[1], k) + w[2] * transfer(t[2], k);
-      const double d = g - ref.transfer(i, k);
-      e2 += d * d;
-    }
-    err.push_back(std::sqrt(e2) / unit);
+    err.push_back(interpolation_error(transfer, triangles[best], w, ref.transfer, i, K) / unit);
   }
   summarize(err, r);
   return r;
@@ -163,15 +169,8 @@ EvalResult evaluate_by_closest_point(const Reference& ref, const RowMatrixX3d& p
   std::vector<double> err;
   err.reserve(at.size());
   for (size_t i = 0; i < at.size(); ++i) {
-    const Triangle& t = triangles[at[i].face];
-    const Eigen::Vector3d& w = at[i].barycentric;
-    double e2 = 0;
-    for (int k = 0; k < K; ++k) {
-      const double g = w[0] * transfer(t[0], k) + w[1] * transfer(t[1], k) + w[2] * transfer(t[2], k);
-      const double d = g - ref.transfer(static_cast<Eigen::Index>(i), k);
-      e2 += d * d;
-    }
-    err.push_back(std::sqrt(e2) / unit);
+    err.push_back(interpolation_error(transfer, triangles[at[i].face], at[i].barycentric, ref.transfer,
+                                      static_cast<Eigen::Index>(i), K) / unit);
   }
   summarize(err, r);
   return r;

@@ -67,7 +67,6 @@ inline Eigen::Vector3d vec(const OMesh::Point& p) { return {p[0], p[1], p[2]}; }
 
 // Everything the module reads: the input, and each OpenMesh face's corners as our mesh has them.
 struct State {
-  const Mesh* mesh = nullptr;
   const RowMatrixXd* values = nullptr;
   SimplifyOptions options;
   double diagonal = 1, cos_min_angle = 1, surface_tolerance = 0;
@@ -324,7 +323,7 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
   }
 
   State s;
-  s.mesh = &mesh, s.values = &values, s.options = options;
+  s.values = &values, s.options = options;
   s.diagonal = mesh.positions.rows() ? std::max(bounds(mesh.positions).diagonal(), 1e-300) : 1;
   s.cos_min_angle = std::cos(options.min_angle_deg * M_PI / 180);
   s.surface_tolerance = options.surface_tolerance * s.diagonal;

@@ -130,6 +130,19 @@ RawMesh grid(int n, double jitter, uint64_t seed) {
   return m;
 }
 
+double total_area(const Mesh& m) {
+  double a = 0;
+  for (const Triangle& t : m.triangles) a += triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+  return a;
+}
+
+EdgeCounts position_edges(const Mesh& m) {
+  std::vector<Triangle> t(m.triangles.size());
+  for (size_t f = 0; f < t.size(); ++f)
+    for (int k = 0; k < 3; ++k) t[f][k] = m.vertex_position[m.triangles[f][k]];
+  return count_edges(t);
+}
+
 RawMesh merge(const RawMesh& a, const RawMesh& b) {
   RawMesh m = a;
   const int64_t shift = a.positions.rows();

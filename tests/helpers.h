@@ -21,6 +21,9 @@ RawMesh grid(int n, double jitter = 0, uint64_t seed = 3);
 //! 12 outward triangles each, corners shared: cubes that touch diagonally share an edge, which
 //! then has four faces (a voxel world's non-manifold edges).
 RawMesh checkerboard_voxels(int n);
+//! The mesh's surface area, and its edge counts over positions (boundary, non-manifold, winding).
+double total_area(const Mesh& m);
+EdgeCounts position_edges(const Mesh& m);
 //! Concatenates meshes (no welding).
 RawMesh merge(const RawMesh& a, const RawMesh& b);
 //! Applies p -> scale * p + offset.

@@ -29,33 +29,20 @@ struct StepSignal : RefinementSignal {
   }
 };
 
-double total_area(const Mesh& m) {
-  double a = 0;
-  for (const Triangle& t : m.triangles) a += triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
-  return a;
-}
-
-EdgeCounts position_edges(const Mesh& m) {
-  std::vector<Triangle> t(m.triangles.size());
-  for (size_t f = 0; f < t.size(); ++f)
-    for (int k = 0; k < 3; ++k) t[f][k] = m.vertex_position[m.triangles[f][k]];
-  return count_edges(t);
-}
-
 TEST(Refine, ClosedMeshStaysConformingWithExactBudgetAndArea) {
   Mesh m = test::build(test::icosphere(1));
   StepSignal s;
   RowMatrixXd v = s.initial(m);
-  const double area = total_area(m);
+  const double area = test::total_area(m);
   RefineStats st = refine_adaptive(m, v, s, RefineOptions{1000, 16, 0});
   EXPECT_TRUE(st.warning.empty()) << st.warning;
   EXPECT_EQ(m.num_faces(), 1000u);
-  EdgeCounts e = position_edges(m);
+  EdgeCounts e = test::position_edges(m);
   EXPECT_EQ(e.boundary, 0u);  // a T-junction would open boundary edges
   EXPECT_EQ(e.non_manifold, 0u);
   EXPECT_EQ(e.winding_conflicts, 0u);  // orientation kept
   EXPECT_EQ(static_cast<long>(m.positions.rows()) - static_cast<long>(e.edges) + static_cast<long>(m.num_faces()), 2);
-  EXPECT_NEAR(total_area(m), area, 1e-12 * area);
+  EXPECT_NEAR(test::total_area(m), area, 1e-12 * area);
   // Every new vertex is the midpoint of its parents and carries the signal's value.
   ASSERT_EQ(st.new_vertices, s.created.size());
   for (const NewVertex& nv : s.created) {
@@ -114,7 +101,7 @@ TEST(Refine, BudgetParityAndTrivialBudgets) {
     RefineStats st = refine_adaptive(m, v, s, RefineOptions{budget, 4, 0});
     EXPECT_EQ(m.num_faces(), budget);
     EXPECT_TRUE(st.warning.empty()) << st.warning;
-    EdgeCounts e = position_edges(m);
+    EdgeCounts e = test::position_edges(m);
     EXPECT_EQ(e.boundary, 32u + st.boundary_splits);  // the outline gained only split halves
   }
 }
@@ -147,7 +134,7 @@ TEST(Refine, CreasesKeepOneVertexPerSideAndNormalsStayExact) {
   for (uint32_t i = 0; i < m.num_vertices(); ++i) uv.row(i) << m.point(i).x(), 2 * m.point(i).y() + 1;
   refine_adaptive(m, v, s, RefineOptions{200, 8, 0}, &uv);
   EXPECT_EQ(m.num_faces(), 200u);
-  EXPECT_EQ(position_edges(m).boundary, 0u);
+  EXPECT_EQ(test::position_edges(m).boundary, 0u);
   // Normals stay the faces' axis-aligned normals; each face's corners agree with its normal.
   for (const Triangle& t : m.triangles) {
     Eigen::Vector3d fn = (m.point(t[1]) - m.point(t[0])).cross(m.point(t[2]) - m.point(t[0])).normalized();
@@ -230,7 +217,7 @@ TEST(Refine, NonManifoldEdgesAreSplitInAllTheirFaces) {
   fin.face_indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
   fin.face_offsets = {0, 3, 6, 9};
   Mesh m = test::build(fin);
-  const double area = total_area(m);
+  const double area = test::total_area(m);
   StepSignal s;
   s.x0 = 0.5;
   RowMatrixXd v = s.initial(m);
@@ -239,7 +226,7 @@ TEST(Refine, NonManifoldEdgesAreSplitInAllTheirFaces) {
   EXPECT_EQ(st.non_manifold_edges_kept, 0u);
   EXPECT_GT(st.non_manifold_splits, 0u);
   EXPECT_EQ(m.num_faces(), 40u);
-  EXPECT_NEAR(total_area(m), area, 1e-12 * area);
+  EXPECT_NEAR(test::total_area(m), area, 1e-12 * area);
   // Conforming: every edge on the fin's segment (y = z = 0) has all three faces, every other
   // edge two, or one on the outline (each edge of the outline lies on an input boundary edge).
   size_t on_fin = 0;
@@ -260,7 +247,7 @@ TEST(Refine, AVoxelCheckerboardKeepsRivarasBoundAtItsNonManifoldEdges) {
   const size_t input_faces = m.num_faces();
   ASSERT_EQ(input_faces, 14u * 12u);
   const std::vector<double> input_angles = face_min_angles_deg(m);
-  const double area = total_area(m);
+  const double area = test::total_area(m);
   struct Diagonal : StepSignal {
     double at(const Eigen::Vector3d& p) const { return 1 / (1 + std::exp(-(p.x() + 0.7 * p.y() - 0.4 * p.z() - 1.9) / 0.05)); }
     void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd&, RowMatrixXd& values) override {
@@ -269,14 +256,14 @@ TEST(Refine, AVoxelCheckerboardKeepsRivarasBoundAtItsNonManifoldEdges) {
   } s;
   RowMatrixXd v(static_cast<Eigen::Index>(m.num_vertices()), 1);
   for (uint32_t i = 0; i < m.num_vertices(); ++i) v(i, 0) = s.at(m.point(i));
-  const size_t input_nm = position_edges(m).non_manifold;
+  const size_t input_nm = test::position_edges(m).non_manifold;
   EXPECT_EQ(input_nm, 36u);  // 3 axes x 12 edges where two cubes of the 3x3x3 checkerboard meet
   RefineStats st = refine_adaptive(m, v, s, RefineOptions{10 * input_faces, 16, 0});
   EXPECT_TRUE(st.warning.empty()) << st.warning;
   EXPECT_EQ(m.num_faces(), 10 * input_faces);
   EXPECT_EQ(st.non_manifold_edges, input_nm);
   EXPECT_GT(st.non_manifold_splits, 0u);
-  EXPECT_NEAR(total_area(m), area, 1e-12 * area);
+  EXPECT_NEAR(test::total_area(m), area, 1e-12 * area);
   expect_rivara_bound(input_angles, m);
   EXPECT_EQ(st.faces_below_1deg_after, 0u);
   // Conforming: every edge has two or four faces (no T-junction opens a boundary), and as many
@@ -322,7 +309,7 @@ TEST(Refine, SliversDegenerateFacesAndAllCreaseTrianglesAreHandled) {
   RowMatrixXd tv = s.initial(t);
   refine_adaptive(t, tv, s, RefineOptions{40, 4, 0});
   EXPECT_EQ(t.num_faces(), 40u);
-  EXPECT_EQ(position_edges(t).boundary, 0u);
+  EXPECT_EQ(test::position_edges(t).boundary, 0u);
 }
 
 TEST(Refine, SameInputSameOutput) {

@@ -12,19 +12,6 @@
 namespace prtsub {
 namespace {
 
-double total_area(const Mesh& m) {
-  double a = 0;
-  for (const Triangle& t : m.triangles) a += triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
-  return a;
-}
-
-EdgeCounts position_edges(const Mesh& m) {
-  std::vector<Triangle> t(m.triangles.size());
-  for (size_t f = 0; f < t.size(); ++f)
-    for (int k = 0; k < 3; ++k) t[f][k] = m.vertex_position[m.triangles[f][k]];
-  return count_edges(t);
-}
-
 // One value per render vertex: a function of its position.
 template <class F>
 RowMatrixXd values_of(const Mesh& m, F&& f, int K = 1) {
@@ -79,7 +66,7 @@ TEST(Simplify, ReachesTheBudgetExactlyAndKeepsSurvivingVerticesAsTheyWere) {
       EXPECT_EQ(v.row(to[i]), v_in.row(i));
     }
     for (uint32_t s : m.source_face) EXPECT_LT(s, in.num_faces());
-    EXPECT_NEAR(total_area(m), 1.0, 1e-12);  // flat and its outline kept: the area cannot change
+    EXPECT_NEAR(test::total_area(m), 1.0, 1e-12);  // flat and its outline kept: the area cannot change
   }
   // Closed: even counts only, so an odd budget ends one below with a warning.
   Mesh s = test::build(test::icosphere(3));
@@ -102,7 +89,7 @@ TEST(Simplify, GuardsNoFlipsManifoldMinimumAngleBoundariesAndCreases) {
   o.min_angle_deg = 15;
   SimplifyStats st = simplify(s, v, o);
   EXPECT_EQ(s.num_faces(), 512u);
-  EdgeCounts e = position_edges(s);
+  EdgeCounts e = test::position_edges(s);
   EXPECT_EQ(e.boundary, 0u);
   EXPECT_EQ(e.non_manifold, 0u);
   EXPECT_EQ(e.winding_conflicts, 0u);
@@ -121,8 +108,8 @@ TEST(Simplify, GuardsNoFlipsManifoldMinimumAngleBoundariesAndCreases) {
   st = simplify(c, cv, SimplifyOptions{60});
   EXPECT_EQ(c.num_faces(), 60u) << st.warning;
   EXPECT_EQ(st.locked_vertices, 8u);
-  EXPECT_NEAR(total_area(c), 6.0, 1e-12);
-  EXPECT_EQ(position_edges(c).boundary, 0u);
+  EXPECT_NEAR(test::total_area(c), 6.0, 1e-12);
+  EXPECT_EQ(test::position_edges(c).boundary, 0u);
   for (Eigen::Index p = 0; p < c.positions.rows(); ++p) {  // every position on the cube's surface
     const Eigen::Vector3d q = c.positions.row(p).transpose();
     EXPECT_NEAR(std::min(q.minCoeff(), 1 - q.maxCoeff()), 0.0, 1e-15);
@@ -183,7 +170,7 @@ TEST(Simplify, FacesOpenMeshCannotTakeAreKeptAsTheyAre) {
   r.face_indices.insert(r.face_indices.end(), {a, c, top});
   r.face_offsets.push_back(r.face_indices.size());
   Mesh m = test::build(r);
-  ASSERT_EQ(position_edges(m).non_manifold, 1u);
+  ASSERT_EQ(test::position_edges(m).non_manifold, 1u);
   RowMatrixXd v = values_of(m, [](const Eigen::Vector3d& p) { return p.x(); });
   SimplifyStats st = simplify(m, v, SimplifyOptions{50});
   EXPECT_EQ(st.kept_faces, 1u);
