@@ -318,7 +318,8 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
           "figure{display:inline-block;margin:6px}figcaption{font-size:12px;max-width:480px}"
           ".frames td{vertical-align:top;text-align:center;border:0;padding:4px}.frames img{display:block;max-width:100%;background:#222}"
           ".frames th{background:none;font-weight:600;text-align:center}iframe{border:1px solid #ccc;width:960px;height:600px;max-width:100%}</style></head><body>";
-  html << "<h1>" << (rows.empty() ? "Rays and samples" : "Uniform against adaptive refinement") << "</h1><p>Input <code>"
+  html << "<h1>" << (rows.empty() ? "Rays and samples" : c.simplify ? "Refinement and simplification" : "Uniform against adaptive refinement")
+       << "</h1><p>Input <code>"
        << html_escape(input) << "</code>, " << source_faces << " triangles. Order " << base.transfer.order << ", "
        << base.transfer.rays << " rays per vertex, seed " << base.transfer.seed
        << ". Error: surface RMS of ‖g − t<sub>ref</sub>‖ / ‖t<sub>unshadowed</sub>‖ at " << ref.points.rows()
@@ -329,6 +330,10 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
          << (base.fit.method == FitMethod::LeastSquares ? " (alpha " + fmt(base.fit.alpha, 3) + ", " + regularizer_name(base.fit.regularizer) + " regulariser)" : std::string())
          << " from " << fmt(base.samples.per_triangle, 3) << " surface samples per triangle with " << base.sample_rays
          << " rays each; a fitted run's time includes its samples and solve.";
+  if (c.simplify)
+    html << " Simplification rows: the input brought to 50%, 25% and 10% of its triangles (or as far as the guards allow), "
+            "ranked by the transfer and by the geometry alone, fitted to samples of the source surface (alpha "
+         << fmt(base.simplified_alpha, 3) << "); their points are located by closest point (docs/simplification.md).";
   html << "</p>";
   if (!rows.empty()) {
     html << "<h2>Error against triangles</h2>" << svg_loglog(series_of(rows, false), "triangles", "RMS error (%)");

@@ -86,18 +86,27 @@ std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string&
   auto mantissas = [](double lo, double hi) {
     return std::log10(hi / lo) < 1.5 ? std::vector<double>{1, 1.5, 2, 3, 4, 5, 6, 7, 8, 9} : std::vector<double>{1, 2, 5};
   };
+  double last_label_right = -1e300, last_label_top = 1e300;
   for (int e = static_cast<int>(std::floor(std::log10(x0))); e <= std::ceil(std::log10(x1)); ++e)
     for (double m : mantissas(x0, x1)) {
       const double x = m * std::pow(10, e);
       if (x < x0 || x > x1) continue;
       o << "<line x1='" << num(px(x)) << "' x2='" << num(px(x)) << "' y1='" << T << "' y2='" << H - B << "' stroke='#e4e4e4'/>";
-      o << "<text x='" << num(px(x)) << "' y='" << H - B + 16 << "' text-anchor='middle'>" << tick(x) << "</text>";
+      // A label only where it clears the last one (about 8 px a character at this size): the fine
+      // gridlines crowd towards the top of a decade (7000 8000 9000 10000 ran together).
+      const std::string label = tick(x);
+      const double half = 4.0 * double(label.size()) + 4;
+      if (px(x) - half < last_label_right) continue;
+      last_label_right = px(x) + half;
+      o << "<text x='" << num(px(x)) << "' y='" << H - B + 16 << "' text-anchor='middle'>" << label << "</text>";
     }
   for (int e = static_cast<int>(std::floor(std::log10(y0))); e <= std::ceil(std::log10(y1)); ++e)
     for (double m : mantissas(y0, y1)) {
       const double y = m * std::pow(10, e);
       if (y < y0 || y > y1) continue;
       o << "<line x1='" << L << "' x2='" << W - R << "' y1='" << num(py(y)) << "' y2='" << num(py(y)) << "' stroke='#e4e4e4'/>";
+      if (py(y) + 15 > last_label_top) continue;  // the same on y: a label's height apart
+      last_label_top = py(y);
       o << "<text x='" << L - 5 << "' y='" << num(py(y) + 4) << "' text-anchor='end'>" << tick(y) << "</text>";
     }
   o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << html_escape(xlabel) << "</text>";

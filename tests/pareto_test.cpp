@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -89,6 +90,22 @@ TEST(Plot, EveryNamedSeriesHasItsOwnColourAndMarkerAndALegendLine) {
   // Series 0 and 10 share a colour (ten of them), not a marker: 10 mod 6 is a square, 0 a circle.
   EXPECT_NE(svg.find("<rect x='"), std::string::npos);
   EXPECT_EQ(svg_loglog({{"empty", {{0, 1}, {-1, 2}}}}, "x", "y"), "<p>(no data)</p>");
+}
+
+TEST(Plot, TickLabelsNeverRunTogether) {
+  // 1,500 to 20,000 triangles: a decade and a bit, so gridlines at every mantissa 1..9, which
+  // crowd towards 10,000. Each x label sits at least its own width (8 px a character) from the last.
+  const std::string svg = svg_loglog({{"s", {{1500, 2}, {20000, 30}}}}, "triangles", "RMS");
+  std::vector<std::pair<double, size_t>> labels;  // (x, characters) of the x axis's labels
+  for (size_t at = svg.find("text-anchor='middle'>"); at != std::string::npos; at = svg.find("text-anchor='middle'>", at + 1)) {
+    const size_t x = svg.rfind("<text x='", at) + 9, end = svg.find("</text>", at);
+    const std::string text = svg.substr(at + 21, end - at - 21);
+    if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0]))) continue;  // the axis titles
+    labels.push_back({std::stod(svg.substr(x)), text.size()});
+  }
+  ASSERT_GE(labels.size(), 5u);
+  for (size_t i = 1; i < labels.size(); ++i)
+    EXPECT_GE(labels[i].first - labels[i - 1].first, 4.0 * double(labels[i].second + labels[i - 1].second)) << i;
 }
 
 int run(std::vector<std::string> args) { return test::run_prtsub(std::move(args)); }
