@@ -24,6 +24,7 @@
 #include "prtsub/prt/render.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/shard.h"
 #include "prtsub/subdiv/mesh_io.h"
 #include "prtsub/subdiv/ply.h"
 #include "prtsub/subdiv/stopwatch.h"
@@ -113,6 +114,81 @@ int bake_many(const BakeCli& cli, const std::vector<std::string>& inputs, const 
   return failed ? 1 : 0;
 }
 
+// The content key of a sharded bake is the asset's with this in place of the output's format:
+// its parts do not depend on the format the merge writes.
+constexpr const char* kPartFormat = "parts.part";
+
+// The bake's arguments for a part's header, so that prtsub merge needs only the folder: every
+// argument but the input, the outputs and the shard's own (--shard, --parts, --phase).
+std::vector<std::string> recorded_arguments(int argc, char** argv, const std::string& input) {
+  static const char* const kDropped[] = {"--shard", "--parts", "--phase", "-o", "--output", "--report"};
+  std::vector<std::string> out;
+  bool input_seen = false;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    bool dropped = false;
+    for (const char* d : kDropped) {
+      if (a == d) dropped = true, ++i;  // and its value
+      else if (a.rfind(std::string(d) + "=", 0) == 0) dropped = true;
+    }
+    if (dropped) continue;
+    if (!input_seen && a == input) {
+      input_seen = true;
+      continue;
+    }
+    out.push_back(a);
+  }
+  return out;
+}
+
+// bake --shard I/N --parts DIR: one shard's slice of one phase, written to DIR.
+int bake_shard_cli(const BakeCli& cli, int argc, char** argv, const std::string& shard, const std::string& parts, int phase, bool several) {
+  if (several || cli.input.rfind('@', 0) == 0) throw UsageError("bake: --shard takes one input mesh");
+  if (parts.empty()) throw UsageError("bake: --shard needs --parts DIR, where the parts go");
+  const BakeOptions options = cli.options();
+  if (!cli.report.empty()) check_writable(cli.report);
+  const auto [index, count] = parse_shard(shard);
+  const std::string bytes = read_file_bytes(cli.input);
+  const Mesh mesh = parse_mesh(bytes, cli.input, cli.load);
+  BatchOptions key_options;
+  key_options.bake = options, key_options.load = cli.load;
+  ShardOptions s;
+  s.shard = index, s.shards = count, s.phase = phase, s.dir = parts;
+  s.key = bake_key(bytes, key_options, kPartFormat);
+  std::error_code ec;
+  // The input as given (the asset records it as its source) and where it was given from.
+  s.notes.push_back({"input", cli.input});
+  s.notes.push_back({"cwd", std::filesystem::current_path(ec).string()});
+  for (const std::string& a : recorded_arguments(argc, argv, cli.input)) {
+    if (a.find('\n') != std::string::npos) throw UsageError("bake: an argument with a line break cannot be recorded in a part");
+    s.notes.push_back({"arg", a});
+  }
+  StageProgress progress;
+  const ShardResult r = bake_shard(mesh, options, s, progress.callbacks());
+  progress.finish();
+  Report rep;
+  rep.set("command", "bake");
+  rep.set("input", cli.input);
+  rep.set("parts", parts);
+  rep.set("shard", std::to_string(index) + "/" + std::to_string(count));
+  rep.set("phase", r.phase);
+  rep.set("phases", r.phases);
+  rep.set("nothing_left", r.nothing_left);
+  rep.set("part", r.path);
+  rep.set("points", r.points);
+  rep.set("rays", r.rays);
+  rep.set("bytes", r.bytes);
+  rep.set("seconds_total", r.seconds);
+  rep.set("peak_memory_mib", peak_memory_mib());
+  if (r.nothing_left)
+    rep.print(stdout, {"prtsub bake: shard {shard}: all {phases} phases traced; merge with prtsub merge {parts} -o ASSET"});
+  else
+    rep.print(stdout, {"prtsub bake: shard {shard}, phase {phase} of {phases}: {points} points, {rays} rays in {seconds_total:2} s -> {part} "
+                       "({bytes} bytes)"});
+  if (!cli.report.empty()) rep.write(cli.report);
+  return 0;
+}
+
 int cmd_bake(int argc, char** argv) {
   BakeCli cli;
   std::string output, up = "y", format = "ply";
@@ -134,7 +210,23 @@ int cmd_bake(int argc, char** argv) {
   args.flag("--compress", "glTF: EXT_meshopt_compression (required by the file; most engines and three.js decode it)", &gltf.compress);
   cli.add_refinement(args);
   cli.add_fit(args);
+  std::string stage = "all", shard, parts;
+  int phase = 0;
+  bool print_phases = false;
+  args.option("--stage", "all|refine", "refine: stop after refinement (or simplification) and write the mesh with its point values,\n"
+              "a .ply to bake again: a sharded bake needs a fixed mesh [default all]", &stage);
+  args.option("--shard", "I/N", "trace shard I of N of one phase of this bake into --parts DIR; then prtsub merge DIR (docs/scaling.md)", &shard);
+  args.option("--parts", "DIR", "the shards' part files: with --shard, where this shard writes; without, the parts to merge into -o ASSET", &parts);
+  args.option("--phase", "Q", "with --shard: the phase to trace [default: the first this shard has not traced]", &phase, 1, 64);
+  args.flag("--shard-phases", "print how many phases a sharded bake with these options has, and exit", &print_phases);
   if (!args.parse(argc, argv, 2)) return 0;
+  if (stage != "all" && stage != "refine") throw UsageError("bake: --stage takes all or refine, not '" + stage + "'");
+  if (print_phases) {
+    std::printf("%d\n", shard_phases(cli.options()));
+    return 0;
+  }
+  if (!shard.empty()) return bake_shard_cli(cli, argc, argv, shard, parts, phase, !more.empty());
+  if (phase) throw UsageError("bake: --phase is for --shard");
   if (output.empty()) throw UsageError("bake: missing -o ASSET.ply");
   if (up != "y" && up != "z") throw UsageError("bake: --up takes y or z, not '" + up + "'");
   gltf.up = parse_up_axis(up);
@@ -150,7 +242,10 @@ int cmd_bake(int argc, char** argv) {
   const bool to_gltf = is_gltf_path(output);
   if (!to_gltf && (gltf.quantize || gltf.compress || gltf.up != UpAxis::Y))
     throw UsageError("bake: --up, --quantize and --compress are for glTF outputs (-o ASSET.glb or .gltf)");
-  const BakeOptions options = cli.options();
+  BakeOptions options = cli.options();
+  options.refine_only = stage == "refine";
+  if (options.refine_only && to_gltf) throw UsageError("bake: --stage refine writes a .ply (a mesh to bake again)");
+  if (options.refine_only && !parts.empty()) throw UsageError("bake: --stage refine is not sharded (its refinement is one queue)");
   check_writable(output);
   if (!cli.report.empty()) check_writable(cli.report);
 
@@ -158,12 +253,13 @@ int cmd_bake(int argc, char** argv) {
   const std::string bytes = read_file_bytes(cli.input);
   const Mesh mesh = parse_mesh(bytes, cli.input, cli.load);
   const double seconds_load = clock.lap();
-  StageProgress progress;
-  BakeResult res = bake(mesh, options, progress.callbacks());
-  progress.finish();
   // The batch's content key, so that a later batch over the same inputs skips this asset.
   BatchOptions key_options;
   key_options.bake = options, key_options.load = cli.load, key_options.gltf = gltf;
+  StageProgress progress;
+  BakeResult res = parts.empty() ? bake(mesh, options, progress.callbacks())
+                                 : bake_merged(mesh, options, parts, bake_key(bytes, key_options, kPartFormat), progress.callbacks());
+  progress.finish();
   const std::string key = bake_key(bytes, key_options, output);
   res.metadata.push_back({"bake_key", key});
   clock.lap();
@@ -185,6 +281,51 @@ int cmd_bake(int argc, char** argv) {
   for (const std::string& w : res.warnings) std::fprintf(stderr, "prtsub: warning: %s\n", w.c_str());
   if (!cli.report.empty()) r.write(cli.report);
   return 0;
+}
+
+// merge DIR -o ASSET: the bake the parts were traced for, with its input and options read
+// from them, run as bake INPUT OPTIONS --parts DIR -o ASSET.
+int cmd_merge(int argc, char** argv) {
+  std::string dir, output, report;
+  ArgParser args("merge", "Gathers the part files a sharded bake (bake --shard I/N --parts DIR) wrote, checks that they\n"
+                          "belong together, runs the fit and writes the asset: bit-identical to the same bake in one process.\n"
+                          "The input mesh and the options are the ones recorded in the parts.");
+  args.positional("DIR", "the parts' folder", &dir);
+  args.option("--output", "ASSET", "output asset, .ply, .glb or .gltf (required)", &output);
+  args.alias("-o", "--output");
+  args.option("--report", "FILE", "write a JSON report of the bake", &report);
+  if (!args.parse(argc, argv, 2)) return 0;
+  if (dir.empty()) throw UsageError("merge: missing the parts' folder");
+  if (output.empty()) throw UsageError("merge: missing -o ASSET");
+  const std::vector<PartHeader> parts = list_parts(dir);
+  if (parts.empty()) throw InputError(dir + ": holds no parts (*.part) to merge");
+  std::vector<std::string> a = {argv[0], "bake"};
+  std::string input, cwd;
+  for (const auto& [name, value] : parts.front().notes) {
+    if (name == "input") input = value;
+    if (name == "cwd") cwd = value;
+    if (name == "arg") a.push_back(value);
+  }
+  if (input.empty()) throw InputError(parts.front().path + ": does not name its input mesh (bake INPUT OPTIONS --parts DIR -o ASSET merges it)");
+  a.insert(a.begin() + 2, input);
+  // The bake runs where the shards ran, so that the input (and the source the asset records)
+  // is the path they were given; the folder and the outputs are the caller's.
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  dir = fs::absolute(dir, ec).string(), output = fs::absolute(output, ec).string();
+  if (!report.empty()) report = fs::absolute(report, ec).string();
+  if (!cwd.empty() && fs::path(input).is_relative()) {
+    fs::current_path(cwd, ec);
+    if (ec || !fs::exists(input, ec))
+      throw InputError(parts.front().path + ": its input " + input + " (from " + cwd +
+                       ") is not there; bake INPUT OPTIONS --parts DIR -o ASSET merges with the input named");
+  }
+  for (const char* x : {"--parts", dir.c_str(), "-o", output.c_str()}) a.push_back(x);
+  if (!report.empty()) a.push_back("--report"), a.push_back(report);
+  std::vector<char*> v;
+  for (std::string& x : a) v.push_back(x.data());
+  v.push_back(nullptr);
+  return cmd_bake(int(a.size()), v.data());
 }
 
 // inspect: what an asset holds, checked, with its transfer's energy per SH band.
@@ -364,6 +505,7 @@ const char* kUsage =
     "\n"
     "commands:\n"
     "  bake      compute per-vertex shadowed SH transfer and write a PRT asset\n"
+    "  merge     gather a sharded bake's parts (bake --shard I/N --parts DIR), fit, write the asset\n"
     "  inspect   print and check what an asset holds, with its energy per SH band\n"
     "  bench     time the transfer stage against a bare Embree occlusion loop\n"
     "  compare   uniform against adaptive refinement: tables, plots and relit frames\n"
@@ -393,6 +535,7 @@ int run_cli(int argc, char** argv) {
       return 0;
     }
     if (command == "bake") return cmd_bake(argc, argv);
+    if (command == "merge") return cmd_merge(argc, argv);
     if (command == "inspect") return cmd_inspect(argc, argv);
     if (command == "bench") return cmd_bench(argc, argv);
     if (command == "render") return cmd_render(argc, argv);

@@ -21,6 +21,7 @@
 #include "prtsub/subdiv/random.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/trace_log.h"
 #include "prtsub/prt/vertex_top_up.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
@@ -151,8 +152,9 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"levels", std::to_string(o.uniform.levels)});
     m.push_back({"scheme", uniform_scheme_name(o.uniform.scheme)});
   }
-  m.push_back({"fit", fit_method_name(o.fit.method)});
-  if (o.fit.method != FitMethod::Point) {
+  if (o.refine_only) m.push_back({"stage", "refine (the refined mesh and its point values, to bake again)"});
+  m.push_back({"fit", o.refine_only ? "point" : fit_method_name(o.fit.method)});
+  if (o.fit.method != FitMethod::Point && !o.refine_only) {
     m.push_back({"samples", std::to_string(r.fit_data.samples.size())});
     m.push_back({"sample_allocation", sample_allocation_name(r.fit_data.allocation)});
     if (r.fit_data.allocation == SampleAllocation::Pilot) {
@@ -170,7 +172,7 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     }
     m.push_back({"sample_rays", std::to_string(o.sample_rays)});
   }
-  if (o.fit.method == FitMethod::LeastSquares) {
+  if (o.fit.method == FitMethod::LeastSquares && !o.refine_only) {
     m.push_back({"alpha", std::to_string(r.simplified && r.simplify.collapses > 0 ? o.simplified_alpha : o.fit.alpha)});
     m.push_back({"regularizer", regularizer_name(o.fit.regularizer)});
     m.push_back({"mass", mass_matrix_name(o.fit.mass)});
@@ -306,6 +308,7 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
     r.rays += r.top_up.rays;
     r.seconds_top_up = clock.lap();
   }
+  if (o.transfer.log) o.transfer.log->barrier(true);  // a sharded bake: the rest is the merge's
   r.point = r.transfer;
   r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
   r.seconds_fit = clock.lap();
@@ -447,6 +450,8 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions
 BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress& progress) {
   const BakeOptions o = resolve_bake_options(options);
   check_bake_options(o);
+  if (o.transfer.log && o.refine == Refinement::Adaptive)
+    throw InputError("a sharded bake needs a fixed mesh: write the adaptive mesh first (bake --stage refine), then shard its bake");
   Stopwatch clock;
   BakeResult r;
   r.mesh = o.refine == Refinement::Uniform ? refine_uniform(mesh, o.uniform) : mesh;
@@ -470,6 +475,13 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     r.seconds_refine = clock.lap();
   }
   r.vertex_rays.assign(r.mesh.num_vertices(), o.transfer.rays);
+  if (o.transfer.log && o.fit.method == FitMethod::Point) o.transfer.log->barrier(true);
+  if (o.refine_only) {  // --stage refine: the mesh and its point values, for later bakes
+    r.point = r.transfer;
+    r.seconds_total = clock.total();
+    r.metadata = bake_metadata(o, r);
+    return r;
+  }
   if (o.fit.method != FitMethod::Point) {
     if (r.simplified && r.simplify.collapses > 0) fit_to_source(mesh, scene, o, progress, clock, r);
     else fit(scene, o, progress, clock, r);

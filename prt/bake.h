@@ -73,6 +73,10 @@ struct BakeOptions {
   //! direct transfer).
   BounceOptions bounce;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
+  //! Stop after refinement (or simplification): the mesh with its point-sampled vertex transfer,
+  //! no samples, fit, error target or bounces. Such an asset is a mesh file that later bakes
+  //! (sharded ones among them, which need a fixed mesh) take as input.
+  bool refine_only = false;
 };
 
 //! Told when a stage with `total` work items starts, then of items as they finish (from

@@ -37,6 +37,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "prtsub/prt/parallel.h"
+#include "prtsub/prt/trace_log.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
@@ -149,6 +150,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     stats.rays += stage_stats.rays;
   };
   trace(first, true);
+  if (to.log) to.log->barrier(false);  // a sharded bake: what follows reads the first stage
 
   // Per face: the sums of its traced samples' excess and squared noise.
   std::vector<double> face_sum(F, 0.0), face_v2(F, 0.0);
@@ -230,6 +232,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     for (size_t k = 0; k < S; ++k)
       if (!traced[k] && candidate[pilot.face[k]]) second.push_back(k);
     trace(second, false);
+    if (to.log) to.log->barrier(false);
     if (progress) progress(S - first.size() - second.size());  // the untraced rest: the bar completes
     sum_faces();
     ++pass;

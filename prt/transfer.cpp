@@ -38,6 +38,7 @@
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/trace_log.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
 
@@ -176,6 +177,27 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
   *variance = d2 * size[0] * size[1] / (double(R) * R);
 }
 
+// A replayed call's rows (every point's, gathered over the shards) into a call's outputs.
+void replay_rows(const TraceCall& c, Eigen::Index P, int K, double* out, double* variance) {
+  if (c.points != uint64_t(P) || c.values_per_point != uint32_t(K) || c.values.size() != size_t(P) * size_t(K) || c.variance.size() != size_t(P))
+    throw InputError("the parts were traced for another bake (a call's shape differs)");
+  std::copy(c.values.begin(), c.values.end(), out);
+  if (variance) std::copy(c.variance.begin(), c.variance.end(), variance);
+}
+
+// The record of a slice [first, last) of a call's points; values and variance copied from the
+// call's full-size outputs when given.
+TraceCall slice_call(uint64_t fingerprint, const TransferOptions& opt, Eigen::Index P, int K, const double* out,
+                     const double* variance, uint64_t first, uint64_t last) {
+  TraceCall c;
+  c.fingerprint = fingerprint;
+  c.points = uint64_t(P), c.first = first, c.last = last;
+  c.values_per_point = uint32_t(K), c.rays = opt.rays;
+  if (out) c.values.assign(out + first * uint64_t(K), out + last * uint64_t(K));
+  if (variance) c.variance.assign(variance + first, variance + last);
+  return c;
+}
+
 void finish_stats(const RayScene& scene, TransferStats* stats, const Stopwatch& clock, Eigen::Index points,
                   int rays) {
   scene.check("tracing transfer rays");
@@ -195,16 +217,34 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
   const RaySequence seq = ray_sequence(opt);
   const Eigen::Index P = points.rows();
   if (opt.streams && opt.streams->size() != static_cast<size_t>(P)) throw InputError("transfer: one stream per point expected");
-  RowMatrixXd out(P, sh_count(opt.order));
+  const int K = sh_count(opt.order);
+  RowMatrixXd out = RowMatrixXd::Zero(P, K);
   if (variance) variance->assign(static_cast<size_t>(P), 0.0);
   const Stopwatch clock;
-  parallel_range(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  // A sharded bake: the call replayed, or only a slice of its points traced (the rest stay 0).
+  Eigen::Index first = 0, last = P;
+  TraceLog::Call call;
+  const uint64_t fingerprint = opt.log ? trace_fingerprint(points, normals, offsets, nullptr, opt) : 0;
+  if (opt.log) call = opt.log->begin(fingerprint, uint64_t(P));
+  if (call.action == TraceLog::Action::Replay) {
+    replay_rows(*call.replay, P, K, out.data(), variance ? variance->data() : nullptr);
+    if (progress) progress(static_cast<size_t>(P));
+    finish_stats(scene, stats, clock, P, opt.rays);
+    return out;
+  }
+  if (call.action == TraceLog::Action::Slice) first = Eigen::Index(call.first), last = Eigen::Index(call.last);
+  std::vector<double> own_variance;
+  double* var = variance ? variance->data() : nullptr;
+  if (!var && call.action == TraceLog::Action::Slice) own_variance.assign(size_t(P), 0.0), var = own_variance.data();
+  parallel_range(last - first, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
-    for (Eigen::Index i = range.begin(); i != range.end(); ++i)
-      point_transfer(scene, points, normals, offsets, i, opt, seq, buf, out.row(i).data(), variance ? variance->data() + i : nullptr);
+    for (Eigen::Index i = first + range.begin(); i != first + range.end(); ++i)
+      point_transfer(scene, points, normals, offsets, i, opt, seq, buf, out.row(i).data(), var ? var + i : nullptr);
     if (progress) progress(static_cast<size_t>(range.size()));
   });
-  finish_stats(scene, stats, clock, P, opt.rays);
+  if (call.action == TraceLog::Action::Slice)
+    opt.log->record(slice_call(fingerprint, opt, P, K, out.data(), var, uint64_t(first), uint64_t(last)));
+  finish_stats(scene, stats, clock, P, opt.rays);  // the whole call's rays, as one process would count them
   return out;
 }
 
@@ -223,22 +263,56 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
   // About kGrain points per task, whatever the groups' sizes.
   const Eigen::Index grain = std::max<Eigen::Index>(1, G > 0 ? kGrain * G / std::max<Eigen::Index>(P, 1) : 1);
   const Stopwatch clock;
-  parallel_range(G, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+  // A sharded bake: the groups replayed in order, or only a slice of them traced (and kept).
+  Eigen::Index g_first = 0, g_last = G;
+  TraceLog::Call call;
+  const uint64_t fingerprint = opt.log ? trace_fingerprint(points, normals, offsets, &group_begin, opt) : 0;
+  if (opt.log) call = opt.log->begin(fingerprint, uint64_t(G));
+  if (call.action == TraceLog::Action::Replay) {
+    const TraceCall& c = *call.replay;
+    if (c.points != uint64_t(P) || c.values_per_point != uint32_t(K) || c.values.size() != size_t(P) * size_t(K))
+      throw InputError("the parts were traced for another bake (a call's shape differs)");
+    for (Eigen::Index g = 0; g < G; ++g) {
+      const size_t first = group_begin[size_t(g)], last = group_begin[size_t(g) + 1];
+      consume(size_t(g), c.values.data() + first * size_t(K), c.variance.data() + first, last - first);
+    }
+    if (progress) progress(static_cast<size_t>(P));
+    finish_stats(scene, stats, clock, P, opt.rays);
+    return;
+  }
+  std::vector<double> kept_values, kept_variance;  // a slice's results, by point
+  size_t p_first = 0, p_last = size_t(P);
+  if (call.action == TraceLog::Action::Slice) {
+    g_first = Eigen::Index(call.first), g_last = Eigen::Index(call.last);
+    p_first = group_begin[size_t(g_first)], p_last = group_begin[size_t(g_last)];
+    kept_values.assign((p_last - p_first) * size_t(K), 0.0), kept_variance.assign(p_last - p_first, 0.0);
+  }
+  const bool keep = call.action == TraceLog::Action::Slice;
+  parallel_range(g_last - g_first, opt.threads, grain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     thread_local std::vector<double> values, variance;
     size_t done = 0;
-    for (Eigen::Index g = range.begin(); g != range.end(); ++g) {
+    for (Eigen::Index g = g_first + range.begin(); g != g_first + range.end(); ++g) {
       const size_t first = group_begin[size_t(g)], last = group_begin[size_t(g) + 1];
       values.resize((last - first) * size_t(K));
       variance.resize(last - first);
       for (size_t i = first; i < last; ++i)
         point_transfer(scene, points, normals, offsets, static_cast<Eigen::Index>(i), opt, seq, buf, values.data() + (i - first) * size_t(K),
                        variance.data() + (i - first));
+      if (keep) {
+        std::copy(values.begin(), values.end(), kept_values.begin() + std::ptrdiff_t((first - p_first) * size_t(K)));
+        std::copy(variance.begin(), variance.end(), kept_variance.begin() + std::ptrdiff_t(first - p_first));
+      }
       consume(size_t(g), values.data(), variance.data(), last - first);
       done += last - first;
     }
     if (progress) progress(done);
   });
+  if (keep) {
+    TraceCall c = slice_call(fingerprint, opt, P, K, nullptr, nullptr, p_first, p_last);
+    c.values = std::move(kept_values), c.variance = std::move(kept_variance);
+    opt.log->record(std::move(c));
+  }
   finish_stats(scene, stats, clock, P, opt.rays);
 }
 

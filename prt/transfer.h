@@ -9,6 +9,8 @@
 
 namespace prtsub {
 
+class TraceLog;
+
 struct TransferOptions {
   int order = 4;       //!< SH order N (N² coefficients), 1..10
   int rays = 256;      //!< rays per point
@@ -28,6 +30,9 @@ struct TransferOptions {
   //! stratified. first_round_rays = 0: a first round, of any count.
   uint32_t first_ray = 0;
   int first_round_rays = 0;
+  //! A sharded bake's record (trace_log.h): calls are replayed from it, or only a slice of their
+  //! points is traced into it. Not owned; null for an ordinary call.
+  TraceLog* log = nullptr;
 };
 
 //! Called from worker threads with the number of points just finished.
