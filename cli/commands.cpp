@@ -273,6 +273,12 @@ int cmd_bake(int argc, char** argv) {
   r.set("output", output);
   record(r, res, options);
   r.set("bake_key", key);
+  if (!parts.empty()) {  // a merge: the rays were the shards'
+    const std::vector<PartHeader> headers = list_parts(parts);
+    r.set("merged_parts", parts);
+    r.set("merged_shards", size_t(headers.empty() ? 0 : headers.front().shards));
+    r.set("merged_phases", size_t(shard_phases(options)));
+  }
   r.set("seconds_total", clock.total());
   r.set("seconds_load", seconds_load);
   r.set("seconds_write", seconds_write);

@@ -275,8 +275,11 @@ void print_bake_summary(const Report& r) {
   if (r.has("target_error_percent"))
     r.print(stdout, {"              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds, "
                      "{target_samples} more samples in {target_sample_rounds} ({seconds_target:3} s)"});
-  r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)",
-                   "  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "
+  if (r.has("merged_parts"))
+    r.print(stdout, {"  rays:       {rays}, traced by {merged_shards} shards in {merged_phases} phases ({merged_parts}) and replayed here"});
+  else
+    r.print(stdout, {"  rays:       {rays} in {seconds_tracing:3} s ({mrays_per_second:2} Mrays/s)"});
+  r.print(stdout, {"  time:       {seconds_total:3} s total (load {seconds_load:3}, scene {seconds_scene:3}, transfer "
                    "{seconds_transfer:3}, refine {seconds_refine:3}, samples {seconds_samples:3}, vertex rays {seconds_top_up:3}, fit {seconds_fit:3}, write "
                    "{seconds_write:3});",
                    "              peak memory {peak_memory_mib:0} MiB"});
