@@ -143,15 +143,11 @@ ParsedHeader open_header(const std::string& path, std::ifstream& in) {
   return parse_header(in, path);
 }
 
-// A part's header and its calls' slices, the payload checked against its size and checksum.
-std::vector<TraceCall> read_part_calls(const std::string& path, ParsedHeader* header) {
-  std::ifstream in;
-  ParsedHeader p = open_header(path, in);
+// A part's calls' slices from `in` (just past the header), the payload checked against the
+// part's size and its checksum.
+std::vector<TraceCall> read_calls(std::istream& in, const ParsedHeader& p, uint64_t size, const std::string& path) {
   uint64_t doubles = 0;
   for (const CallLine& c : p.calls) doubles += (c.last - c.first) * (uint64_t(c.k) + 1);
-  std::error_code ec;
-  const uint64_t size = fs::file_size(path, ec);
-  if (ec) throw IoError(path + ": cannot read its size (" + ec.message() + ")");
   if (size != p.payload_offset + doubles * sizeof(double))
     throw InputError(path + ": damaged part: " + std::to_string(size) + " bytes where its header says " +
                      std::to_string(p.payload_offset + doubles * sizeof(double)));
@@ -173,8 +169,16 @@ std::vector<TraceCall> read_part_calls(const std::string& path, ParsedHeader* he
   XXH3_freeState(state);
   if (!in) throw IoError(path + ": cannot read its values");
   if (sum != p.checksum) throw InputError(path + ": damaged part: its values do not match its checksum");
-  if (header) *header = std::move(p);
   return calls;
+}
+
+std::vector<TraceCall> read_part_calls(const std::string& path) {
+  std::ifstream in;
+  const ParsedHeader p = open_header(path, in);
+  std::error_code ec;
+  const uint64_t size = fs::file_size(path, ec);
+  if (ec) throw IoError(path + ": cannot read its size (" + ec.message() + ")");
+  return read_calls(in, p, size, path);
 }
 
 void write_part(const std::string& path, const PartHeader& h, const std::vector<TraceCall>& calls) {
@@ -246,7 +250,7 @@ std::vector<TraceCall> gather_phase(const std::map<std::pair<uint32_t, uint32_t>
   std::vector<TraceCall> calls;
   for (uint32_t s = 1; s <= shards; ++s) {
     const std::string& path = at.at({phase, s}).path;
-    std::vector<TraceCall> part = read_part_calls(path, nullptr);
+    std::vector<TraceCall> part = read_part_calls(path);
     if (s == 1) {
       calls.resize(part.size());
       for (size_t j = 0; j < part.size(); ++j) {
@@ -275,6 +279,15 @@ std::vector<TraceCall> gather_phase(const std::map<std::pair<uint32_t, uint32_t>
 }
 
 }  // namespace
+
+Part parse_part(const std::string& bytes, const std::string& path) {
+  std::istringstream in(bytes);
+  const ParsedHeader p = parse_header(in, path);
+  Part part;
+  part.calls = read_calls(in, p, bytes.size(), path);
+  part.header = p.header;
+  return part;
+}
 
 PartHeader read_part_header(const std::string& path) {
   std::ifstream in;

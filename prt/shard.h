@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "prtsub/prt/bake.h"
+#include "prtsub/prt/trace_log.h"
 
 namespace prtsub {
 
@@ -62,6 +63,14 @@ struct PartHeader {
   uint32_t shard = 0, shards = 0, phase = 0;  //!< 1-based
   std::vector<std::pair<std::string, std::string>> notes;
 };
+//! A whole part: its header and its calls' slices (trace_log.h).
+struct Part {
+  PartHeader header;
+  std::vector<TraceCall> calls;
+};
+//! A part from its bytes, every size and the checksum checked. \throw InputError naming `path`
+Part parse_part(const std::string& bytes, const std::string& path);
+
 //! The header of a part file. \throw IoError if unreadable, InputError if not a part
 PartHeader read_part_header(const std::string& path);
 //! The headers of every *.part file in `dir`, in name order. \throw IoError if dir is not a folder

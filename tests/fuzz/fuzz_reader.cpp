@@ -8,6 +8,7 @@
 
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/gltf.h"
+#include "prtsub/prt/shard.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/mesh_io.h"
 
@@ -26,8 +27,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     prtsub::parse_asset(bytes, "fuzz_asset.ply");
 #elif PRTSUB_FUZZ_READER == 6
     prtsub::parse_gltf_asset(bytes, "fuzz_asset.glb");
+#elif PRTSUB_FUZZ_READER == 7
+    prtsub::parse_part(bytes, "fuzz.part");
 #else
-#error "PRTSUB_FUZZ_READER: 1 obj, 2 ply, 3 off, 4 stl, 5 asset, 6 gltf"
+#error "PRTSUB_FUZZ_READER: 1 obj, 2 ply, 3 off, 4 stl, 5 asset, 6 gltf, 7 part"
 #endif
   } catch (const prtsub::InputError&) {
   } catch (const prtsub::IoError&) {

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Seed corpus for the readers' fuzz targets: a unit square in every format each reader takes
 (OBJ with normals and UVs, PLY ascii / binary little- and big-endian, OFF, STL ascii and
-binary), a one-triangle asset (ascii and binary), and the glTF assets in seeds/gltf, which
-`prtsub bake` wrote for a unit square (GLB and JSON, compressed, quantized, Z-up, AO).
+binary), a one-triangle asset (ascii and binary), the glTF assets in seeds/gltf, which
+`prtsub bake` wrote for a unit square (GLB and JSON, compressed, quantized, Z-up, AO), and the
+parts in seeds/part, which `prtsub bake --shard` wrote for it (one shard, two; point values, pilot).
 usage: make_corpus.py OUT_DIR"""
 import os, shutil, struct, sys
 
@@ -48,7 +49,8 @@ write("asset", "triangle_ascii.ply", asset_head % "ascii" + "".join("%g %g %g 0 
 write("asset", "triangle_binary.ply", (asset_head % "binary_little_endian").encode() +
       b"".join(struct.pack("<7f", *p, 0, 0, 1, 0.886) for p in tri) + struct.pack("<B3ii", 3, 0, 1, 2, 0))
 
-seeds = os.path.join(os.path.dirname(os.path.abspath(__file__)), "seeds", "gltf")
-os.makedirs(os.path.join(out, "gltf"), exist_ok=True)
-for name in sorted(os.listdir(seeds)):
-    shutil.copy(os.path.join(seeds, name), os.path.join(out, "gltf", name))
+for reader in ("gltf", "part"):
+    seeds = os.path.join(os.path.dirname(os.path.abspath(__file__)), "seeds", reader)
+    os.makedirs(os.path.join(out, reader), exist_ok=True)
+    for name in sorted(os.listdir(seeds)):
+        shutil.copy(os.path.join(seeds, name), os.path.join(out, reader, name))
