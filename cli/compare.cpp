@@ -86,7 +86,7 @@ struct CompareCli {
     args.option("--frame-size", "W,H", "frame size [default 480,360]", &frame_size);
     args.option("--frame-rays", "R", "rays per pixel of the reference frame", &frame_rays, 1, 1 << 20);
     args.flag("--simplify", "also simplify to 50%, 25% and 10% of the input's triangles, ranked by the transfer and by the "
-              "geometry alone (rows 'simplify transfer' and 'simplify geometry', judged by closest point)", &simplify);
+              "geometry alone (rows 'simplify transfer' and 'simplify geometry', judged by closest point), and both ways (rows 'auto')", &simplify);
     args.flag("--pareto", "also bake the input unrefined under a grid of fixed settings, the default and --error targets: "
               "error against bake seconds (DIR/pareto.csv, pareto.json)", &pareto);
     args.option("--grid-rays", "R1,R2,...", "pareto: rays per vertex [default 64,256,1024]", &grid_rays);
@@ -158,6 +158,10 @@ std::vector<BakeOptions> plan_runs(const BakeOptions& base, size_t source_faces,
         BakeOptions a = base;
         a.refine = Refinement::Adaptive, a.adaptive.budget = std::max<size_t>(1, source_faces * share / 100), a.simplify.metric = m;
         plan.push_back(a);
+        if (m == SimplifyMetric::Transfer) {  // both ways at the same count
+          a.refine = Refinement::Auto;
+          plan.push_back(a);
+        }
       }
   return plan;
 }
@@ -173,8 +177,10 @@ std::vector<Row> evaluate_run(const BakeOptions& s, const BakeResult& r, const R
     const EvalResult e = r.simplified ? evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, *v, s.transfer.threads)
                                       : evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, *v);
     Row row;
-    row.method = r.simplified ? "simplify" : refinement_name(s.refine);
-    row.estimate = r.simplified ? simplify_metric_name(s.simplify.metric) : s.refine == Refinement::Adaptive ? estimate_name(s.estimate) : "";
+    const bool both_ways = s.refine == Refinement::Auto;
+    row.method = both_ways ? "auto" : r.simplified ? "simplify" : refinement_name(s.refine);
+    row.estimate = both_ways ? estimate_name(s.estimate)
+                   : r.simplified ? simplify_metric_name(s.simplify.metric) : s.refine == Refinement::Adaptive ? estimate_name(s.estimate) : "";
     row.fit = fit;
     row.triangles = r.mesh.num_faces();
     row.vertices = r.mesh.num_vertices();
@@ -299,7 +305,7 @@ std::vector<PlotSeries> series_of(const std::vector<Row>& rows, bool by_time) {
   std::vector<PlotSeries> out;
   for (const Row& r : rows) {
     if (r.method == "none") continue;
-    const std::string name = (r.method == "adaptive" || r.method == "simplify" ? r.method + " " + r.estimate : r.method) +
+    const std::string name = (r.method == "adaptive" || r.method == "simplify" || r.method == "auto" ? r.method + " " + r.estimate : r.method) +
                              (r.fit == "point" ? "" : " " + r.fit);
     auto it = std::find_if(out.begin(), out.end(), [&](const PlotSeries& s) { return s.name == name; });
     if (it == out.end()) it = out.insert(out.end(), PlotSeries{name, {}, true, 4, false});
@@ -333,7 +339,9 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
   if (c.simplify)
     html << " Simplification rows: the input brought to 50%, 25% and 10% of its triangles (or as far as the guards allow), "
             "ranked by the transfer and by the geometry alone, fitted to samples of the source surface (alpha "
-         << fmt(base.simplified_alpha, 3) << "); their points are located by closest point (docs/simplification.md).";
+         << fmt(base.simplified_alpha, 3) << "); their points are located by closest point (docs/simplification.md). "
+            "Rows 'auto': the same counts both ways (--refine auto: simplified to " << fmt(base.auto_share, 2)
+         << " of the count where the transfer is smooth, then split where it varies), located the same way.";
   html << "</p>";
   if (!rows.empty()) {
     html << "<h2>Error against triangles</h2>" << svg_loglog(series_of(rows, false), "triangles", "RMS error (%)");

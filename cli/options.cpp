@@ -84,10 +84,15 @@ void BakeCli::add_fit(ArgParser& args) {
 }
 
 void BakeCli::add_refinement(ArgParser& args) {
-  args.choice("--refine", "refinement", &bake.refine, {Refinement::None, Refinement::Adaptive, Refinement::Uniform},
-              refinement_name);
-  args.option("--budget", "T", "adaptive: output triangle count (required); below the input's, the mesh is simplified",
+  args.choice("--refine", "refinement (auto: simplified where the transfer is smooth, then split where it varies)", &bake.refine,
+              {Refinement::None, Refinement::Adaptive, Refinement::Uniform, Refinement::Auto}, refinement_name);
+  args.option("--budget", "T", "adaptive, auto: output triangle count (required); adaptive below the input's simplifies",
               &bake.adaptive.budget, size_t(0), size_t(1) << 30);
+  args.option("--surface-tolerance", "D", "adaptive below the input, auto: no collapse moves the surface by more than D times the "
+              "bounding-box diagonal (adaptive relaxes it up to 8x where the budget needs it) [default 0.005]",
+              &bake.simplify.surface_tolerance, 1e-6, 0.04);
+  args.option("--auto-share", "S", "auto: simplify to this share of min(budget, input) before refining [default 0.8]", &bake.auto_share,
+              1e-6, 1.0);
   args.choice("--simplify-metric", "adaptive below the input: rank collapses by the transfer's change and the geometry, or the "
               "geometry alone", &bake.simplify.metric, {SimplifyMetric::Transfer, SimplifyMetric::Geometry}, simplify_metric_name);
   args.option("--min-angle", "A", "adaptive below the input: no collapse makes a face with an angle below A degrees",
@@ -121,7 +126,8 @@ BakeOptions BakeCli::options() const {
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;
   o.source = input;
-  if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw UsageError("--budget: required with --refine adaptive");
+  if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
+    throw UsageError(std::string("--budget: required with --refine ") + refinement_name(o.refine));
   try {
     check_bake_options(o);
   } catch (const InputError& e) {

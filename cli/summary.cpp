@@ -135,7 +135,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   r.set("normals_from_file", mesh.normals_from_file);
   r.set("normals", mesh.normals_from_file ? "from file" : "computed");
   r.set("uvs", mesh.has_uv() ? "; UVs from file" : "");
-  if (o.refine == Refinement::Adaptive) {
+  if (o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) {
     r.set("budget", o.adaptive.budget);
     r.set("estimate", estimate_name(o.estimate));
     r.set("batch", o.adaptive.batch);
@@ -157,9 +157,9 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
       r.set("refused_crease_side", st.refused_crease_side);
       r.set("refused_surface", st.refused_surface);
       r.set("surface_tolerance_percent", 100 * st.surface_tolerance);
-    } else {
-      record(r, res.refine);
     }
+    if (!res.simplified || o.refine == Refinement::Auto) record(r, res.refine);
+    if (o.refine == Refinement::Auto) r.set("auto_share", o.auto_share), r.set("simplified_to", res.simplify.faces_after);
   }
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
@@ -176,7 +176,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("seconds_bounce", res.seconds_bounce);
   }
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
-  if (res.simplified && res.simplify.collapses > 0) r.set("alpha", o.simplified_alpha);
+  if (res.simplified && res.simplify.collapses > 0 && (o.refine != Refinement::Auto || res.refine.splits == 0)) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
   record_ray_spread(r, res.vertex_rays, o.transfer.rays);
   if (o.target_error > 0) {
@@ -206,7 +206,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
 }
 
 void print_bake_summary(const Report& r) {
-  const bool adaptive = r.format("{refine}") == "adaptive", uniform = r.format("{refine}") == "uniform";
+  const bool adaptive = r.format("{refine}") == "adaptive" || r.format("{refine}") == "auto", uniform = r.format("{refine}") == "uniform";
   const bool ao = r.format("{signal}") == "ao";
   const std::string fit = r.format("{fit}");
   r.print(stdout,
@@ -227,7 +227,9 @@ void print_bake_summary(const Report& r) {
                      "              guards refused (per evaluation): {refused_flip} flips, {refused_angle} angles, "
                      "{refused_line} boundary or feature lines, {refused_crease_side} crease sides, {refused_surface} "
                      "surface moves (tolerance reached {surface_tolerance_percent:2}% of the diagonal)"});
-  else if (adaptive)
+  if (r.format("{refine}") == "auto")
+    r.print(stdout, {"  both ways:  simplified to {simplified_to} triangles (auto share {auto_share}), then refined to the budget"});
+  if (adaptive && (r.format("{simplified}") != "yes" || r.format("{refine}") == "auto"))
     r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
                      "{pre_refinement_splits} pre-refinement) in {batches} batches",
                      "              min angle {min_angle_before_deg:3}° before, {min_angle_after_deg:3}° after; faces "

@@ -34,8 +34,13 @@ enum class Refinement {
   //! input's count, simplified (collapses where it does not change) below it
   Adaptive,
   Uniform,   //!< OpenSubdiv 1→4 splits, `uniform.levels` times: the baseline
+  //! both ways, to exactly `adaptive.budget` triangles from any input: simplified first (to
+  //! `auto_share` of the smaller of the budget and the input's count) where the transfer is
+  //! smooth, then split where it varies; new vertices are traced at their closest points on the
+  //! input, and the fit samples the input's surface
+  Auto,
 };
-Refinement parse_refinement(const std::string& name);  //!< none, adaptive, uniform \throw InputError
+Refinement parse_refinement(const std::string& name);  //!< none, adaptive, uniform, auto \throw InputError
 const char* refinement_name(Refinement r);
 
 struct BakeOptions {
@@ -52,6 +57,10 @@ struct BakeOptions {
   //! meshes'): a coarse face spans real curvature of the transfer, which a strong edge regulariser
   //! flattens; 0.002 measured best at 10% on bunny, chinese_dragon and mori_knob (BENCHMARKS.md)
   double simplified_alpha = 0.002;
+  //! Auto: the share of min(budget, input triangles) simplification goes down to before
+  //! refinement spends the rest where the transfer varies; 0.8 measured best on sibenik of
+  //! 0.5-0.95 (BENCHMARKS.md, "Both ways")
+  double auto_share = 0.8;
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples

@@ -61,7 +61,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
     << " " << p.holdout << " " << p.first_share << " " << p.first_significance << "\n";
   const SimplifyOptions& q = o.simplify;
   s << "simplify " << simplify_metric_name(q.metric) << " " << q.geometry_weight << " " << q.min_angle_deg << " " << q.feature_tolerance << " "
-    << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << "\n";
+    << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << "\n";
   s << "stage " << (o.refine_only ? "refine" : "all") << "\n";
   s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << "\n";
   s << "crease " << b.load.crease_angle_deg << "\n";

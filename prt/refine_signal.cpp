@@ -16,6 +16,8 @@
 // the new vertices themselves see the shadow. Cost: one transfer per input face.
 #include "prtsub/prt/refine_signal.h"
 
+#include "prtsub/prt/closest_point.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -84,6 +86,30 @@ double probe_estimate(EdgeEstimate estimate, const FaceProbe& f, const double* p
 TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOptions& options)
     : scene_(scene), options_(options) {
   check_transfer_options(options.transfer);
+  if (options.project_onto) source_offsets_ = vertex_offset_directions(*options.project_onto);
+}
+
+void TransferSignal::project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d* offsets) {
+  const Mesh& m = *options_.project_onto;
+  const std::vector<SurfaceLocation> at = closest_points(m, points, options_.transfer.threads);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const SurfaceLocation& l = at[size_t(i)];
+    const Triangle& t = m.triangles[l.face];
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), d = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 3; ++c) {
+      p += l.barycentric[c] * m.point(t[c]);
+      n += l.barycentric[c] * m.normals.row(t[c]).transpose();
+      d += l.barycentric[c] * source_offsets_.row(t[c]).transpose();
+    }
+    // The source's normal where it faces the vertex's way; on the other side of a thin wall, not
+    // moved at all; across a crease (the closest face is the other side's), moved with its own.
+    const double agree = n.norm() > 1e-12 ? n.normalized().dot(normals.row(i)) : 0;
+    if (agree < -0.1) continue;
+    points.row(i) = p.transpose();
+    if (agree < 0.5) continue;
+    normals.row(i) = n.normalized().transpose();
+    if (offsets) offsets->row(i) = (d.norm() > 1e-12 ? Eigen::Vector3d(d.normalized()) : n.normalized()).transpose();
+  }
 }
 
 double TransferSignal::edge_error(const EdgeView& e) const {
@@ -100,7 +126,8 @@ void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const R
     position_of[i] = batch[i].position_index;
   }
   // Both sides of a split crease are made by one split, so they are in this batch together.
-  const RowMatrixX3d offsets = offset_directions(position_of, normals);
+  RowMatrixX3d offsets = offset_directions(position_of, normals);
+  if (options_.project_onto) project(points, normals, &offsets);
   // A batch's vertices have consecutive indices: stream = render-vertex index.
   TransferOptions o = options_.transfer;
   o.stream_offset = batch.front().index;
@@ -127,6 +154,7 @@ void TransferSignal::probe_faces(const std::vector<FaceProbe>& faces, std::vecto
     points.row(static_cast<Eigen::Index>(i)) = faces[i].centroid.transpose();
     normals.row(static_cast<Eigen::Index>(i)) = faces[i].normal.transpose();
   }
+  if (options_.project_onto) project(points, normals, nullptr);
   TransferOptions o = options_.transfer;
   o.stream_offset = uint64_t(1) << 40;  // streams apart from every vertex's
   TransferStats stats;

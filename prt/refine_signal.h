@@ -28,6 +28,12 @@ struct TransferSignalOptions {
   EdgeEstimate estimate = EdgeEstimate::Root;
   double curvature_guard_deg = 10;  //!< θ0 of the curvature estimate
   TransferOptions transfer;        //!< order, rays, seed, threads of new vertices' transfer
+  //! If set: the mesh whose surface the scene is, for refining a mesh that only lies near it (a
+  //! simplified one). New vertices and probes are then traced at their closest points on it,
+  //! with its interpolated normal where that is within 60° of their own (their own across a
+  //! crease; not moved where it faces away: a thin wall's other side); the refined mesh's
+  //! geometry is not moved. Not owned.
+  const Mesh* project_onto = nullptr;
 };
 
 //! An estimate's value on one edge (Probe ranks edges as Length does, Root as ‖Δt‖·√|ab|).
@@ -52,8 +58,11 @@ class TransferSignal : public RefinementSignal {
   const std::vector<double>& variance() const { return variance_; }
 
  private:
+  //! Moves points (and their normals and offsets) to their closest points on project_onto.
+  void project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d* offsets);
   const RayScene& scene_;
   TransferSignalOptions options_;
+  RowMatrixX3d source_offsets_;  //!< project_onto's vertex offset directions
   uint64_t rays_ = 0;
   std::vector<double> variance_;
 };

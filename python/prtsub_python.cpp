@@ -128,7 +128,8 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
                            "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
   }
-  if (o.refine == Refinement::Adaptive && o.adaptive.budget == 0) throw InputError("refine='adaptive' needs budget=T triangles");
+  if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
+    throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");
   return o;
 }
 

@@ -173,6 +173,44 @@ TEST(Bake, ABudgetBelowTheInputSimplifiesAndTheFitToTheSourceBeatsItsPointValues
   EXPECT_LT(e_fit, e_geometry) << e_fit << "% against " << e_geometry << "%";
 }
 
+// --refine auto: a finely tessellated sphere floating over a coarse floor. The sphere's transfer
+// is smooth (collapse it), its shadow crosses the floor's few large faces (split them). Exactly
+// the budget from below, at and above the input's count; at the input's own count a far lower
+// error than its own triangles (0.31x measured), one reference judging both.
+TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
+  const Mesh mesh = test::build(test::merge(test::transformed(test::icosphere(3), 1.0, Eigen::Vector3d(0, 0, 0.5)),
+                                            test::transformed(test::grid(4), 6.0, Eigen::Vector3d(-3, -3, -1))));
+  const size_t F = mesh.num_faces();
+  ASSERT_EQ(F, 1280u + 32u);
+  BakeOptions o;
+  o.transfer.rays = 64, o.transfer.threads = 1;
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  ReferenceOptions ro;
+  ro.points = 4000, ro.rays = 1024, ro.order = 4;
+  const Reference ref = make_reference(mesh, scene, ro);
+  const BakeResult none = bake(mesh, o);
+  const double e_none = evaluate(ref, vertex_positions(none.mesh), none.mesh.triangles, none.mesh.source_face, none.transfer).rms_percent;
+  o.refine = Refinement::Auto;
+  for (size_t T : {F / 2, F, 2 * F}) {
+    o.adaptive.budget = T;
+    const BakeResult r = bake(mesh, o);
+    EXPECT_EQ(r.mesh.num_faces(), T);  // exact: the floor has a boundary
+    EXPECT_TRUE(r.simplified);
+    EXPECT_GT(r.simplify.collapses, 0u);
+    EXPECT_GT(r.refine.splits, 0u);
+    EXPECT_TRUE(r.transfer.allFinite());
+    if (T != F) continue;
+    const double e = evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, r.transfer).rms_percent;
+    EXPECT_LT(e, 0.5 * e_none) << e << "% against the input's triangles' " << e_none << "%";
+    bool recorded = false;
+    for (const auto& [k, v] : r.metadata) recorded |= k == "auto";
+    EXPECT_TRUE(recorded);
+    o.transfer.threads = 2;
+    EXPECT_EQ((bake(mesh, o).transfer - r.transfer).cwiseAbs().maxCoeff(), 0.0) << "any thread count";
+    o.transfer.threads = 1;
+  }
+}
+
 TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {
   BakeOptions o;
   o.signal = AssetSignal::Ao;

@@ -4,6 +4,7 @@
 
 #include "helpers.h"
 #include "prtsub/prt/bake.h"
+#include "prtsub/prt/closest_point.h"
 #include "prtsub/prt/refine_signal.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
@@ -67,6 +68,34 @@ TEST(Estimates, ProbesSeeShadowsTheCornersMissAndRootWeighsThemByAreaToTheQuarte
   std::vector<double> none{1.0};
   TransferSignal(scene, o).probe_faces(faces, none);
   EXPECT_TRUE(none.empty());
+}
+
+// A vertex of a mesh that only lies near the scene's surface (a coarse sphere's edge midpoint,
+// inside a fine sphere) is traced at its closest point on the scene's mesh: there a lone convex
+// surface sees the whole sky, and the control variate makes that exact, the unshadowed transfer
+// of the interpolated normal. Unprojected, its rays start inside the fine sphere and are blocked.
+TEST(Eval, ASignalProjectingOntoTheSourceTracesNewVerticesOnItsSurface) {
+  const Mesh fine = test::build(test::icosphere(4));
+  const RayScene scene(fine.positions, position_triangles(fine));
+  const Mesh coarse = test::build(test::icosphere(0));
+  const Triangle& t = coarse.triangles[0];
+  NewVertex v;
+  v.index = 0, v.a = t[0], v.b = t[1], v.position_index = 0;
+  v.position = 0.5 * (coarse.point(t[0]) + coarse.point(t[1]));
+  v.normal = v.position.normalized();
+  ASSERT_LT(v.position.norm(), 0.9);  // well inside the fine sphere
+  TransferSignalOptions o;
+  o.transfer.rays = 64, o.transfer.order = 4;
+  RowMatrixXd inside, projected;
+  TransferSignal(scene, o).compute_values({v}, RowMatrixXd::Zero(1, 16), inside);
+  o.project_onto = &fine;
+  TransferSignal(scene, o).compute_values({v}, RowMatrixXd::Zero(1, 16), projected);
+  const std::vector<SurfaceLocation> at = closest_points(fine, v.position.transpose());
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (int c = 0; c < 3; ++c) n += at[0].barycentric[c] * fine.normals.row(fine.triangles[at[0].face][c]).transpose();
+  const Eigen::VectorXd open = unshadowed_transfer(4, n.normalized());
+  EXPECT_LT((projected.row(0).transpose() - open).norm(), 1e-12 * open.norm());
+  EXPECT_LT(inside.row(0).norm(), 0.1 * open.norm()) << "unprojected, the sphere blocks it";
 }
 
 TEST(Eval, FlatUnoccludedSurfaceHasZeroErrorAndReferencePointsAreFixed) {
