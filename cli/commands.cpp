@@ -214,10 +214,10 @@ int cmd_bake(int argc, char** argv) {
   int phase = 0;
   bool print_phases = false;
   args.option("--stage", "all|refine", "refine: stop after refinement (or simplification) and write the mesh with its point values,\n"
-              "a .ply to bake again: a sharded bake needs a fixed mesh [default all]", &stage);
-  args.option("--shard", "I/N", "trace shard I of N of one phase of this bake into --parts DIR; then prtsub merge DIR (docs/scaling.md)", &shard);
+              "a .ply to bake again: a sharded bake needs a fixed mesh", &stage);
+  args.option("--shard", "I/N", "trace shard I of N of one phase of this bake into --parts DIR; then prtsub merge DIR (docs/shards.md)", &shard);
   args.option("--parts", "DIR", "the shards' part files: with --shard, where this shard writes; without, the parts to merge into -o ASSET", &parts);
-  args.option("--phase", "Q", "with --shard: the phase to trace [default: the first this shard has not traced]", &phase, 1, 64);
+  args.option("--phase", "Q", "with --shard: the phase to trace (default: the first this shard has not traced)", &phase, 1, 64);
   args.flag("--shard-phases", "print how many phases a sharded bake with these options has, and exit", &print_phases);
   if (!args.parse(argc, argv, 2)) return 0;
   if (stage != "all" && stage != "refine") throw UsageError("bake: --stage takes all or refine, not '" + stage + "'");

@@ -89,9 +89,9 @@ void BakeCli::add_refinement(ArgParser& args) {
   args.option("--budget", "T", "adaptive, auto: output triangle count (required); adaptive below the input's simplifies",
               &bake.adaptive.budget, size_t(0), size_t(1) << 30);
   args.option("--surface-tolerance", "D", "adaptive below the input, auto: no collapse moves the surface by more than D times the "
-              "bounding-box diagonal (adaptive relaxes it up to 8x where the budget needs it) [default 0.005]",
+              "bounding-box diagonal (adaptive relaxes it up to 8x where the budget needs it)",
               &bake.simplify.surface_tolerance, 1e-6, 0.04);
-  args.option("--auto-share", "S", "auto: simplify to this share of min(budget, input) before refining [default 0.8]", &bake.auto_share,
+  args.option("--auto-share", "S", "auto: simplify to this share of min(budget, input) before refining", &bake.auto_share,
               1e-6, 1.0);
   args.choice("--simplify-metric", "adaptive below the input: rank collapses by the transfer's change and the geometry, or the "
               "geometry alone", &bake.simplify.metric, {SimplifyMetric::Transfer, SimplifyMetric::Geometry}, simplify_metric_name);

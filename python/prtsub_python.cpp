@@ -114,6 +114,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "refine") o.refine = parse_refinement(value.cast<std::string>());
     else if (key == "budget") o.adaptive.budget = value.cast<size_t>();
     else if (key == "levels") o.uniform.levels = value.cast<int>();
+    else if (key == "auto_share") o.auto_share = value.cast<double>();
     else if (key == "simplify_metric") o.simplify.metric = parse_simplify_metric(value.cast<std::string>());
     else if (key == "min_angle") o.simplify.min_angle_deg = value.cast<double>();
     else if (key == "simplify_alpha") o.simplified_alpha = value.cast<double>();
@@ -126,7 +127,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
+                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");

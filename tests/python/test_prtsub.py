@@ -170,6 +170,20 @@ class BakeTest(unittest.TestCase):
         with self.assertRaises(prtsub.InputError):
             prtsub.bake(sphere, refine="adaptive", budget=100, simplify_metric="sideways")
 
+    def test_both_ways_reaches_the_budget_as_the_tool_does(self):
+        sphere = prtsub.mesh(*icosphere_on_ground())
+        write_obj(self.path("s.obj"), *icosphere_on_ground())
+        ours = prtsub.bake(sphere, rays=16, refine="auto", budget=300, auto_share=0.7)
+        subprocess.run([BINARY, "bake", self.path("s.obj"), "-o", self.path("a.ply"), "--rays", "16", "--refine", "auto",
+                        "--budget", "300", "--auto-share", "0.7"], check=True, capture_output=True)
+        tool = prtsub.load(self.path("a.ply"))
+        self.assertEqual(len(ours.faces), 300)
+        np.testing.assert_array_equal(ours.faces, tool.faces)
+        np.testing.assert_allclose(ours.transfer, tool.transfer, rtol=0, atol=1e-6)
+        self.assertTrue(any(k == "auto" for k, _ in ours.metadata))
+        with self.assertRaises(prtsub.InputError):
+            prtsub.bake(sphere, refine="auto")  # no budget
+
     def test_errors_are_the_tools_one_line_messages(self):
         with open(self.path("bad.obj"), "w") as f:
             f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
