@@ -281,7 +281,7 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
     so.min_per_triangle = 0;
     if (so.density <= 0) so.per_triangle *= double(r.mesh.num_faces()) / double(std::max<size_t>(source.num_faces(), 1));
     const SurfaceSamples on_source = make_surface_samples(source, so);
-    const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads);
+    const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads, &on_source.normals);
     // Group by the face they landed on (a counting sort keeps the source order within a face).
     const size_t F = r.mesh.num_faces(), S = at.size();
     const Buckets by_face = bucket_sort(F, S, 1, [&](size_t k, uint32_t) { return at[k].face; });

@@ -56,6 +56,7 @@ struct Query {
   const Mesh* mesh;
   double pad;
   Eigen::Vector3d p;
+  const Eigen::Vector3d* facing = nullptr;  // only faces whose winding normal has a positive dot with it
   SurfaceLocation best;
   double best_d2 = std::numeric_limits<double>::infinity();
 };
@@ -65,6 +66,7 @@ bool visit(RTCPointQueryFunctionArguments* args) {
   const uint32_t f = args->primID;
   const Triangle& t = q->mesh->triangles[f];
   const Eigen::Vector3d a = q->mesh->point(t[0]), b = q->mesh->point(t[1]), c = q->mesh->point(t[2]);
+  if (q->facing && !((b - a).cross(c - a).dot(*q->facing) > 0)) return false;
   const Eigen::Vector3d w = closest_on_triangle(q->p, a, b, c);
   const double d2 = (w[0] * a + w[1] * b + w[2] * c - q->p).squaredNorm();
   if (d2 < q->best_d2 || (d2 == q->best_d2 && f < q->best.face)) {
@@ -81,22 +83,31 @@ bool visit(RTCPointQueryFunctionArguments* args) {
 
 }  // namespace
 
-std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RowMatrixX3d& points, int threads) {
+std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RowMatrixX3d& points, int threads, const RowMatrixX3d* normals) {
   if (mesh.num_faces() == 0) throw InputError("closest points: the mesh has no faces");
   if (!points.allFinite()) throw InputError("closest points: a query point is not finite");
+  if (normals && normals->rows() != points.rows()) throw InputError("closest points: one normal per query point expected");
   const RayScene scene(mesh.positions, position_triangles(mesh));
   std::vector<SurfaceLocation> out(static_cast<size_t>(points.rows()));
   parallel_range<Eigen::Index>(points.rows(), threads, 256, [&](const tbb::blocked_range<Eigen::Index>& range) {
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      Query q{&mesh, 1e-6 * scene.diagonal(), points.row(i).transpose(), {}};
-      q.best.face = UINT32_MAX;
+      const Eigen::Vector3d n = normals ? Eigen::Vector3d(normals->row(i).transpose()) : Eigen::Vector3d::Zero();
+      Query q{&mesh, 1e-6 * scene.diagonal(), points.row(i).transpose(), normals ? &n : nullptr, {}};
       const Eigen::Vector3f local = scene.to_local(q.p);
-      RTCPointQuery query;
-      query.x = local.x(), query.y = local.y(), query.z = local.z(), query.time = 0;
-      query.radius = std::numeric_limits<float>::infinity();
-      RTCPointQueryContext context;
-      rtcInitPointQueryContext(&context);
-      rtcPointQuery(scene.handle(), &query, &context, visit, &q);
+      q.best.face = UINT32_MAX;
+      // Facing faces first; where none faces the point's way (or none was asked for), any face.
+      for (int pass = normals ? 0 : 1; pass < 2 && (pass == 0 || q.best.face == UINT32_MAX); ++pass) {
+        if (pass == 1) q.facing = nullptr;
+        q.best = SurfaceLocation{};
+        q.best.face = UINT32_MAX;
+        q.best_d2 = std::numeric_limits<double>::infinity();
+        RTCPointQuery query;
+        query.x = local.x(), query.y = local.y(), query.z = local.z(), query.time = 0;
+        query.radius = std::numeric_limits<float>::infinity();
+        RTCPointQueryContext context;
+        rtcInitPointQueryContext(&context);
+        rtcPointQuery(scene.handle(), &query, &context, visit, &q);
+      }
       q.best.distance = std::sqrt(q.best_d2);
       out[size_t(i)] = q.best;
     }

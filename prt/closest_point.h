@@ -15,9 +15,14 @@ struct SurfaceLocation {
 };
 
 //! For each row of `points`, the closest point on the mesh's faces (ties: the lower face).
-//! The result does not depend on `threads` (0: every core).
-//! \throw InputError for a mesh without faces or a non-finite point; EmbreeError if Embree fails
-std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RowMatrixX3d& points, int threads = 0);
+//! With `normals` (one per point), the closest among the faces whose winding faces the point's
+//! normal's way (a positive dot), so that a point on one side of a thin wall or a table top is
+//! not located on the other; any face where none does. The result does not depend on `threads`
+//! (0: every core).
+//! \throw InputError for a mesh without faces, a non-finite point or a normal count that does not
+//!        match; EmbreeError if Embree fails
+std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RowMatrixX3d& points, int threads = 0,
+                                            const RowMatrixX3d* normals = nullptr);
 
 //! The closest point of triangle (a, b, c) to p, as barycentric weights of a, b, c.
 Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

@@ -162,7 +162,7 @@ EvalResult evaluate_by_closest_point(const Reference& ref, const RowMatrixX3d& p
   m.vertex_position.resize(static_cast<size_t>(positions.rows()));
   for (size_t i = 0; i < m.vertex_position.size(); ++i) m.vertex_position[i] = static_cast<uint32_t>(i);
   m.triangles = triangles;
-  const std::vector<SurfaceLocation> at = closest_points(m, ref.points, threads);
+  const std::vector<SurfaceLocation> at = closest_points(m, ref.points, threads, &ref.normals);
   EvalResult r;
   r.reference_rays = ref.rays;
   r.noise_floor_percent = 100 * ref.noise_floor;

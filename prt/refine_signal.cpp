@@ -91,7 +91,7 @@ TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOption
 
 void TransferSignal::project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d* offsets) {
   const Mesh& m = *options_.project_onto;
-  const std::vector<SurfaceLocation> at = closest_points(m, points, options_.transfer.threads);
+  const std::vector<SurfaceLocation> at = closest_points(m, points, options_.transfer.threads, &normals);
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     const SurfaceLocation& l = at[size_t(i)];
     const Triangle& t = m.triangles[l.face];

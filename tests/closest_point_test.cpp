@@ -41,6 +41,31 @@ TEST(ClosestPoint, AgreesWithBruteForceOverEveryFace) {
   for (const SurfaceLocation& l : closest_points(m, corners)) EXPECT_LT(l.distance, 1e-12);
 }
 
+// A thin slab (the unit cube squashed to 1% thick, z in [0, 0.01]): a point on its underside,
+// facing down, is nearer to the top once it sits above the slab's middle, as a simplified
+// surface's point may. Given normals, each is located on the faces that face its way.
+TEST(ClosestPoint, GivenNormalsAPointIsLocatedOnTheSideItFaces) {
+  RawMesh slab = test::cube();
+  slab.positions.col(2) *= 0.01;
+  const Mesh m = test::build(slab, 30.0);
+  RowMatrixX3d q(3, 3), n(3, 3);
+  q << 0.3, 0.4, 0.007, 0.3, 0.4, 0.007, 0.3, 0.4, 0.007;
+  n << 0, 0, -1, 0, 0, 1, 1, 0, 0;
+  const std::vector<SurfaceLocation> plain = closest_points(m, q), facing = closest_points(m, q, 1, &n);
+  auto z = [&](const SurfaceLocation& l) {
+    const Triangle& t = m.triangles[l.face];
+    return l.barycentric[0] * m.point(t[0]).z() + l.barycentric[1] * m.point(t[1]).z() + l.barycentric[2] * m.point(t[2]).z();
+  };
+  EXPECT_NEAR(z(plain[0]), 0.01, 1e-12) << "unfiltered: the top is nearer";
+  EXPECT_NEAR(plain[0].distance, 0.003, 1e-12);
+  EXPECT_NEAR(z(facing[0]), 0.0, 1e-12) << "facing down: the underside";
+  EXPECT_NEAR(facing[0].distance, 0.007, 1e-12);
+  EXPECT_NEAR(z(facing[1]), 0.01, 1e-12) << "facing up: the top";
+  EXPECT_NEAR(facing[2].distance, 0.7, 1e-12) << "facing +x: only the wall at x = 1";
+  const RowMatrixX3d two = n.topRows(2);
+  EXPECT_THROW(closest_points(m, q, 1, &two), InputError);
+}
+
 TEST(ClosestPoint, TriangleRegionsAndBadInput) {
   const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
   EXPECT_TRUE(closest_on_triangle({-1, -1, 3}, a, b, c).isApprox(Eigen::Vector3d(1, 0, 0)));        // corner a
