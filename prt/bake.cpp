@@ -69,6 +69,11 @@ void check_bake_options(const BakeOptions& o) {
     throw InputError("fit: the simplified mesh's alpha must be finite and non-negative, got " + std::to_string(o.simplified_alpha));
 }
 
+void check_fixed_mesh(const BakeOptions& o) {
+  if (o.refine == Refinement::Adaptive || o.refine == Refinement::Auto)
+    throw InputError("a sharded bake needs a fixed mesh: write the adaptive mesh first (bake --stage refine), then shard its bake");
+}
+
 namespace {
 
 // The variance of a chunk's three moment rows Σ_k w_k h_c(p_k) f_k, each summed over its K
@@ -499,8 +504,7 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions
 BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress& progress) {
   const BakeOptions o = resolve_bake_options(options);
   check_bake_options(o);
-  if (o.transfer.log && (o.refine == Refinement::Adaptive || o.refine == Refinement::Auto))
-    throw InputError("a sharded bake needs a fixed mesh: write the adaptive mesh first (bake --stage refine), then shard its bake");
+  if (o.transfer.log) check_fixed_mesh(o);
   Stopwatch clock;
   BakeResult r;
   r.mesh = o.refine == Refinement::Uniform ? refine_uniform(mesh, o.uniform) : mesh;

@@ -145,6 +145,10 @@ BakeOptions resolve_bake_options(const BakeOptions& options);
 //! Checks options before any work. \throw InputError naming the value at fault
 void check_bake_options(const BakeOptions& options);
 
+//! A sharded bake (transfer.log set) needs a fixed mesh: adaptive and auto refinement trace
+//! inside their one queue. \throw InputError saying so when `options` would refine adaptively
+void check_fixed_mesh(const BakeOptions& options);
+
 //! The fit's samples on `mesh` and their transfer (stages "pilot" and "samples").
 //! \param prior, prior_variance the vertices' point values and their variances: the pilot
 //!        compares its samples with them (Area allocation ignores them; may then be null)

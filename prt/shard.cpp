@@ -311,8 +311,7 @@ ShardResult bake_shard(const Mesh& mesh, const BakeOptions& options, const Shard
   const Stopwatch clock;
   if (s.shards == 0 || s.shard == 0 || s.shard > s.shards) throw InputError("shard " + std::to_string(s.shard) + " of " + std::to_string(s.shards) + " does not exist");
   if (s.key.empty()) throw InputError("a sharded bake needs its content key");
-  if (options.refine == Refinement::Adaptive || options.refine == Refinement::Auto)
-    throw InputError("a sharded bake needs a fixed mesh: write the adaptive mesh first (bake --stage refine), then shard its bake");
+  check_fixed_mesh(options);  // before the folder is made
   std::error_code ec;
   fs::create_directories(s.dir, ec);
   if (ec) throw IoError(s.dir + ": cannot create the parts folder (" + ec.message() + ")");

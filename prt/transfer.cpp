@@ -218,7 +218,7 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
   const Eigen::Index P = points.rows();
   if (opt.streams && opt.streams->size() != static_cast<size_t>(P)) throw InputError("transfer: one stream per point expected");
   const int K = sh_count(opt.order);
-  RowMatrixXd out = RowMatrixXd::Zero(P, K);
+  RowMatrixXd out(P, K);  // every row is written, except outside a shard's slice (zeroed there)
   if (variance) variance->assign(static_cast<size_t>(P), 0.0);
   const Stopwatch clock;
   // A sharded bake: the call replayed, or only a slice of its points traced (the rest stay 0).
@@ -232,7 +232,7 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
     finish_stats(scene, stats, clock, P, opt.rays);
     return out;
   }
-  if (call.action == TraceLog::Action::Slice) first = Eigen::Index(call.first), last = Eigen::Index(call.last);
+  if (call.action == TraceLog::Action::Slice) first = Eigen::Index(call.first), last = Eigen::Index(call.last), out.setZero();
   std::vector<double> own_variance;
   double* var = variance ? variance->data() : nullptr;
   if (!var && call.action == TraceLog::Action::Slice) own_variance.assign(size_t(P), 0.0), var = own_variance.data();

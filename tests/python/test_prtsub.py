@@ -156,13 +156,16 @@ class BakeTest(unittest.TestCase):
         self.assertEqual(ours.stats["bounces"], 2)
         self.assertGreater(ours.transfer[:, 0].sum(), direct.transfer[:, 0].sum())
 
-    def test_a_budget_below_the_input_simplifies_as_the_tool_does(self):
+    def bake_both(self, name, cli, **options):
+        """The module's bake and the tool's of the same icosphere on the ground, as (ours, the tool's asset)."""
         sphere = prtsub.mesh(*icosphere_on_ground())
-        write_obj(self.path("s.obj"), *icosphere_on_ground())
-        ours = prtsub.bake(sphere, rays=16, refine="adaptive", budget=150, min_angle=10)
-        subprocess.run([BINARY, "bake", self.path("s.obj"), "-o", self.path("s.ply"), "--rays", "16", "--refine", "adaptive",
-                        "--budget", "150", "--min-angle", "10"], check=True, capture_output=True)
-        tool = prtsub.load(self.path("s.ply"))
+        write_obj(self.path(name + ".obj"), *icosphere_on_ground())
+        subprocess.run([BINARY, "bake", self.path(name + ".obj"), "-o", self.path(name + ".ply")] + cli, check=True, capture_output=True)
+        return sphere, prtsub.bake(sphere, **options), prtsub.load(self.path(name + ".ply"))
+
+    def test_a_budget_below_the_input_simplifies_as_the_tool_does(self):
+        sphere, ours, tool = self.bake_both("s", ["--rays", "16", "--refine", "adaptive", "--budget", "150", "--min-angle", "10"],
+                                            rays=16, refine="adaptive", budget=150, min_angle=10)
         self.assertEqual(len(ours.faces), 150)
         np.testing.assert_array_equal(ours.faces, tool.faces)
         np.testing.assert_allclose(ours.transfer, tool.transfer, rtol=0, atol=1e-6)
@@ -171,12 +174,8 @@ class BakeTest(unittest.TestCase):
             prtsub.bake(sphere, refine="adaptive", budget=100, simplify_metric="sideways")
 
     def test_both_ways_reaches_the_budget_as_the_tool_does(self):
-        sphere = prtsub.mesh(*icosphere_on_ground())
-        write_obj(self.path("s.obj"), *icosphere_on_ground())
-        ours = prtsub.bake(sphere, rays=16, refine="auto", budget=300, auto_share=0.7)
-        subprocess.run([BINARY, "bake", self.path("s.obj"), "-o", self.path("a.ply"), "--rays", "16", "--refine", "auto",
-                        "--budget", "300", "--auto-share", "0.7"], check=True, capture_output=True)
-        tool = prtsub.load(self.path("a.ply"))
+        sphere, ours, tool = self.bake_both("a", ["--rays", "16", "--refine", "auto", "--budget", "300", "--auto-share", "0.7"],
+                                            rays=16, refine="auto", budget=300, auto_share=0.7)
         self.assertEqual(len(ours.faces), 300)
         np.testing.assert_array_equal(ours.faces, tool.faces)
         np.testing.assert_allclose(ours.transfer, tool.transfer, rtol=0, atol=1e-6)
