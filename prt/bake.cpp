@@ -327,8 +327,7 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   r.point = r.transfer;
   FitOptions fo = o.fit;
   // Both ways, the mesh keeps about the input's density: the ordinary fit's weight, weighed by
-  // noise as it is (sibenik at 0.8: 3.17% against 3.19% without; the test scene of
-  // Bake.BothWays... 1.64% against 2.47% with the simplified weight and no noise weighting).
+  // noise as it is (sibenik: 2.771% against 2.793% without noise weighing; docs/simplification.md).
   const bool both_ways = o.refine == Refinement::Auto && r.refine.splits > 0;  // (when it only simplified, as a simplification)
   fo.alpha = both_ways ? o.fit.alpha : o.simplified_alpha;
   r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, fo, &r.fit, both_ways ? &r.point_variance : nullptr);
