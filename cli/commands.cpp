@@ -460,6 +460,8 @@ int cmd_eval(int argc, char** argv) {
   args.option("--points", "N", "reference points", &ro.points, size_t(1), size_t(10000000));
   args.option("--rays", "R", "reference rays per point (0: 8x the asset's rays)", &rays, 0, 1 << 20);
   args.option("--seed", "S", "reference seed; keep it fixed to compare assets", &ro.seed);
+  args.option("--paths", "P", "an asset baked with --bounces: paths per point tracing the reference's bounced light (0: --rays)",
+              &ro.paths, 0, 1 << 20);
   add_threads_option(args, ro.threads);
   add_report_option(args, report);
   if (!args.parse(argc, argv, 2)) return 0;
@@ -472,6 +474,9 @@ int cmd_eval(int argc, char** argv) {
   const double crease = meta.count("crease_angle") ? std::atof(meta["crease_angle"].c_str()) : LoadOptions{}.crease_angle_deg;
   ro.rays = rays > 0 ? rays : 8 * std::max(asset_rays, 1);
   ro.order = asset.order;
+  // A bounced asset is judged against bounced light at its own count and albedo.
+  const AssetBounces bounces = asset_bounces(asset, input);
+  ro.bounces = bounces.bounces, ro.albedo = bounces.albedo;
   const Mesh src = load_mesh(source, LoadOptions{crease});
   const RayScene scene(src.positions, position_triangles(src));
   const Reference ref = make_reference(src, scene, ro);
@@ -494,11 +499,20 @@ int cmd_eval(int argc, char** argv) {
   r.set("reference_points", e.points);
   r.set("reference_rays", ro.rays);
   r.set("unlocated_points", e.unlocated);
+  r.set("reference_bounces", ref.bounces);
+  if (ref.bounces > 0) {
+    r.set("albedo", ro.albedo);
+    r.set("reference_paths", ref.paths);
+    r.set("seconds_reference_bounces", ref.seconds_bounce);
+  }
   r.set("seconds_reference", t_ref);
   r.print(stdout, {"prtsub eval: {input} against {source}", "  asset:      {triangles} triangles, order {order}, {asset_rays} rays per vertex",
                    "  reference:  {reference_points} points, {reference_rays} rays each ({seconds_reference:2} s); its own noise "
-                   "floor {noise_floor_percent:3}%; located by {location}",
-                   "  error:      RMS {rms_percent:3}%, 95th percentile {p95_percent:3}% of ||t_unshadowed||"});
+                   "floor {noise_floor_percent:3}%; located by {location}"});
+  if (ref.bounces > 0)
+    r.print(stdout, {"  bounced:    {reference_bounces} bounces at albedo {albedo}: {reference_paths} paths per point through the source "
+                     "({seconds_reference_bounces:2} s), not the asset"});
+  r.print(stdout, {"  error:      RMS {rms_percent:3}%, 95th percentile {p95_percent:3}% of ||t_unshadowed||"});
   if (e.unlocated) r.print(stdout, {"  warning:    {unlocated_points} reference points had no face in the asset"});
   if (!report.empty()) r.write(report);
   return 0;

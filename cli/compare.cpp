@@ -428,6 +428,10 @@ int cmd_compare(int argc, char** argv) {
   ro.rays = 8 * base.transfer.rays;
   ro.order = base.transfer.order;  // 1 for AO
   ro.threads = base.transfer.threads;
+  // Runs baked with bounces are judged against bounced light; with auto each run would stop at
+  // its own count, and one reference cannot hold them all.
+  if (base.bounce.until_converged) throw UsageError("compare: --bounces auto stops each run at its own count; give a number");
+  ro.bounces = base.bounce.bounces, ro.albedo = base.bounce.albedo;
   std::printf("prtsub compare: %s (%zu triangles), order %d, %d rays; reference %zu points x %d rays\n", c.bake.input.c_str(),
               source.num_faces(), base.transfer.order, base.transfer.rays, ro.points, ro.rays);
   std::fflush(stdout);

@@ -83,6 +83,7 @@ int cmd_eval_fits(int argc, char** argv) {
   if (!cli.report.empty()) check_writable(cli.report);
   const BakeOptions b = resolve_bake_options(cli.options());
   const bool ao = b.signal == AssetSignal::Ao;
+  if (b.bounce.bounces > 0 || b.bounce.until_converged) throw UsageError("eval --fits: compares fits of direct transfer; --bounces does not apply");
 
   // One bake for the vertices' rays, one set of samples; every column is fitted from them.
   StageProgress progress;

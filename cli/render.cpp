@@ -27,10 +27,19 @@ Image reference_frame(const RayScene& scene, const SurfaceHits& hits, const Asse
   TransferOptions topt = c.transfer;
   topt.order = asset.order;
   TransferStats stats;
-  Progress progress("reference", hits.covered(), stderr_is_terminal());
+  // A bounced asset's reference bounces as the bake did, at the albedo the asset records.
+  const AssetBounces b = asset_bounces(asset, c.input);
+  PathOptions bounced;
+  bounced.bounces = b.bounces, bounced.albedo = b.albedo, bounced.paths = topt.rays, bounced.seed = topt.seed + 1;
+  bounced.threads = topt.threads;
+  if (b.bounces > 0 && std::abs(b.albedo - c.albedo) > 1e-9)
+    std::fprintf(stderr, "prtsub render: warning: %s was baked with bounces at albedo %g; shading at --albedo %g\n", c.input.c_str(),
+                 b.albedo, c.albedo);
+  Progress progress("reference", hits.covered() * (b.bounces > 0 ? 2 : 1), stderr_is_terminal());
   Image frame = render_reference(scene, hits, asset.positions, asset.normals, asset.triangles, light, c.albedo, topt, &stats,
-                                 [&](size_t n) { progress.add(n); });
+                                 [&](size_t n) { progress.add(n); }, b.bounces > 0 ? &bounced : nullptr);
   progress.finish();
+  if (b.bounces > 0) r.set("reference_bounces", b.bounces), r.set("reference_albedo", b.albedo);
   r.set("rays", stats.rays);
   r.set("rays_per_pixel", topt.rays);
   r.set("reference_rays_per_second", static_cast<double>(stats.rays) / std::max(stats.seconds, 1e-9));
@@ -126,6 +135,7 @@ int cmd_render(int argc, char** argv) {
   r.print(stdout, {"prtsub render: {input} -> {output} ({mode_text})",
                    "  frame:      {width}x{height}, {pixels_covered} pixels covered ({covered_fraction:%1}), mean radiance {mean_radiance}",
                    "  camera:     {camera}", "  reference:  {rays} rays, {reference_mrays:2} Mrays/s",
+                   "              {reference_bounces} bounces at albedo {reference_albedo}, traced as paths through the surface",
                    "              bare loop {bare_mrays:2} Mrays/s",
                    "  time:       {seconds_total:3} s total (load {seconds_load:3}, light {seconds_light:3}, scene "
                    "{seconds_scene:3}, primary {seconds_primary:3}, shade {seconds_shade:3}, write {seconds_write:3})"});

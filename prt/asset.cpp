@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 
@@ -65,6 +66,22 @@ Mesh asset_mesh(const Asset& a) {
   m.input_vertices = m.vertex_position.size();
   for (uint32_t s : a.source_face) m.input_triangles = std::max<size_t>(m.input_triangles, size_t(s) + 1);
   return m;
+}
+
+AssetBounces asset_bounces(const Asset& asset, const std::string& path) {
+  // bake writes "bounces N (albedo A; ...)" (docs/asset_format.md).
+  AssetBounces b;
+  for (const auto& [key, value] : asset.metadata) {
+    if (key != "bounces") continue;
+    char* end = nullptr;
+    const long n = std::strtol(value.c_str(), &end, 10);
+    const size_t at = value.find("(albedo ");
+    const double a = at == std::string::npos ? -1 : std::strtod(value.c_str() + at + 8, nullptr);
+    if (end == value.c_str() || n < 0 || n > 64 || !(a >= 0 && a <= 1))
+      throw InputError(path + ": metadata 'bounces " + value + "' is not 'N (albedo A; ...)' with N in 0..64 and A in [0, 1]");
+    b.bounces = static_cast<int>(n), b.albedo = a;
+  }
+  return b;
 }
 
 Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal) {

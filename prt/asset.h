@@ -64,6 +64,14 @@ void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatri
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
                  const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer);
 
+//! What an asset baked with bounces folded into its transfer (metadata `bounces`).
+struct AssetBounces {
+  int bounces = 0;  //!< 0: shadowed transfer only
+  double albedo = 0.8;
+};
+//! \throw InputError naming `path` if the metadata is there but not as bake writes it
+AssetBounces asset_bounces(const Asset& asset, const std::string& path);
+
 //! Reads an asset and checks it: sizes consistent, indices in range, no NaN/Inf. A glTF asset
 //! (docs/asset_format.md, "glTF"), told apart by its bytes, is read by parse_gltf_asset.
 //! \throw InputError naming the file and the first problem found

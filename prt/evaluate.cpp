@@ -14,9 +14,11 @@
 #include <unordered_map>
 
 #include "prtsub/prt/closest_point.h"
+#include "prtsub/prt/path_transfer.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
 
@@ -66,11 +68,23 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
   TransferOptions to;
   to.order = o.order, to.rays = o.rays, to.seed = o.seed + 1, to.threads = o.threads;
   ref.transfer = shadowed_transfer(scene, ref.points, ref.normals, to);
-  // The reference's own noise: trace the first points again with another seed.
+  // Bounced light: paths through the source, from the reference points (their own seeds).
+  const PathSurface surface{corners, src.normals, src.triangles};
+  PathOptions po;
+  po.order = o.order, po.paths = o.paths > 0 ? o.paths : o.rays, po.bounces = o.bounces, po.albedo = o.albedo;
+  po.seed = o.seed + 3, po.threads = o.threads;
+  if (o.bounces > 0) {
+    const Stopwatch clock;
+    ref.transfer += path_traced_transfer(scene, surface, ref.points, ref.normals, po);
+    ref.bounces = o.bounces, ref.paths = po.paths, ref.seconds_bounce = clock.total();
+  }
+  // The reference's own noise: trace the first points again with other seeds.
   const Eigen::Index m = std::min<Eigen::Index>(n, static_cast<Eigen::Index>(o.noise_points));
   if (m > 0) {
     to.seed = o.seed + 2;
     RowMatrixXd again = shadowed_transfer(scene, ref.points.topRows(m), ref.normals.topRows(m), to);
+    po.seed = o.seed + 4;
+    if (o.bounces > 0) again += path_traced_transfer(scene, surface, ref.points.topRows(m), ref.normals.topRows(m), po);
     const double diff = (again - ref.transfer.topRows(m)).rowwise().squaredNorm().mean();
     ref.noise_floor = std::sqrt(diff / 2) / unshadowed_norm(o.order);  // one estimate's RMS error
   }

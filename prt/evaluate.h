@@ -13,6 +13,11 @@ struct ReferenceOptions {
   uint64_t seed = 20250;  //!< fixed: every asset from one source is judged on the same points
   int threads = 0;
   size_t noise_points = 2000;  //!< points traced twice to measure the reference's own noise
+  //! Interreflection, for an asset baked with bounces: the reference adds the light of that many
+  //! bounces, traced as paths through the source (path_transfer.h), never taken from the asset.
+  int bounces = 0;
+  double albedo = 0.8;
+  int paths = 0;  //!< paths per point for the bounced light; 0: `rays`
 };
 
 //! Reference points with their transfer. The points depend only on the source and the seed.
@@ -22,10 +27,13 @@ struct Reference {
   RowMatrixXd transfer;              //!< #N by K, at `rays` rays
   double noise_floor = 0;            //!< RMS of the reference's own error, relative to ‖t_unshadowed‖
   int rays = 0;
+  int bounces = 0, paths = 0;  //!< the bounced light's (paths only when bounces > 0)
+  double seconds_bounce = 0;
 };
 
 //! Seeded, area-stratified points on `source` (systematic sampling of cumulative area, one
-//! random offset; uniform within each triangle), transfer at each.
+//! random offset; uniform within each triangle), transfer at each: shadowed, plus with
+//! `bounces` the light of that many bounces, traced as paths (docs/sh_convention.md).
 Reference make_reference(const Mesh& source, const RayScene& scene, const ReferenceOptions& options);
 
 struct EvalResult {

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "prtsub/prt/parallel.h"
+#include "prtsub/prt/path_transfer.h"
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
@@ -153,10 +154,18 @@ void hit_points(const SurfaceHits& hits, const RowMatrixX3d& positions, const Ro
 
 Image render_reference(const RayScene& scene, const SurfaceHits& hits, const RowMatrixX3d& positions,
                        const RowMatrixX3d& normals, const std::vector<Triangle>& triangles, const ShLight& light,
-                       double albedo, const TransferOptions& options, TransferStats* stats, const ProgressFn& progress) {
+                       double albedo, const TransferOptions& options, TransferStats* stats, const ProgressFn& progress,
+                       const PathOptions* bounced) {
   RowMatrixX3d points, point_normals;
   hit_points(hits, positions, normals, triangles, points, point_normals);
   RowMatrixXd t = shadowed_transfer(scene, points, point_normals, options, stats, progress);
+  if (bounced && bounced->bounces > 0) {
+    PathOptions p = *bounced;
+    p.order = options.order;
+    TransferStats path_stats;
+    t += path_traced_transfer(scene, PathSurface{positions, normals, triangles}, points, point_normals, p, nullptr, &path_stats, progress);
+    if (stats) stats->rays += path_stats.rays, stats->seconds += path_stats.seconds;
+  }
   RowMatrixX3d radiance = vertex_radiance(t, light, albedo);
   Image img;
   img.width = hits.width, img.height = hits.height, img.channels = 4;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "prtsub/prt/lights.h"
+#include "prtsub/prt/path_transfer.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/transfer.h"
 
@@ -58,10 +59,12 @@ void hit_points(const SurfaceHits& hits, const RowMatrixX3d& positions, const Ro
                 const std::vector<Triangle>& triangles, RowMatrixX3d& points, RowMatrixX3d& point_normals);
 
 //! The per-pixel reference: transfer computed at each hit point with `options`, then shaded.
+//! With `bounced` (bounces > 0), the light of that many bounces is added at each pixel, traced
+//! as paths through the same surface (path_transfer.h); its order is options.order.
 Image render_reference(const RayScene& scene, const SurfaceHits& hits, const RowMatrixX3d& positions,
                        const RowMatrixX3d& normals, const std::vector<Triangle>& triangles, const ShLight& light,
                        double albedo, const TransferOptions& options, TransferStats* stats = nullptr,
-                       const ProgressFn& progress = {});
+                       const ProgressFn& progress = {}, const PathOptions* bounced = nullptr);
 
 //! Error of image a against reference b over pixels covered in both (alpha > 0).
 struct ImageError {

@@ -50,6 +50,24 @@ TEST(Asset, RoundTripsEveryField) {
   EXPECT_EQ(ply.element("face")->scalar_names, std::vector<std::string>{"source_face"});
 }
 
+TEST(Asset, TheBouncesAnAssetFoldsInAreReadFromItsMetadata) {
+  Asset a;
+  EXPECT_EQ(asset_bounces(a, "a.ply").bounces, 0);
+  a.metadata = {{"bounces", "3 (albedo 0.55; the last pass added 1.2% of ||t_unshadowed||)"}};
+  const AssetBounces b = asset_bounces(a, "a.ply");
+  EXPECT_EQ(b.bounces, 3);
+  EXPECT_EQ(b.albedo, 0.55);
+  for (const char* bad : {"three (albedo 0.5)", "3", "3 (albedo 1.5)", "-1 (albedo 0.5)", "65 (albedo 0.5)", "2 (albedo nan)"}) {
+    a.metadata = {{"bounces", bad}};
+    try {
+      asset_bounces(a, "a.ply");
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("a.ply: ", 0), 0u) << e.what();
+    }
+  }
+}
+
 TEST(Asset, UvsAreWrittenAfterTheNormalsOnlyWhenTheMeshHasThem) {
   test::TempDir dir;
   Mesh m = build_mesh(parse_obj(test::seam_square_obj(), "seam.obj"), "seam.obj");

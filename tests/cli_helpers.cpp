@@ -11,4 +11,9 @@ int run_prtsub(std::vector<std::string> args) {
   return run_cli(static_cast<int>(argv.size()), argv.data());
 }
 
+double json_number(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\": ");
+  return at == std::string::npos ? std::nan("") : std::atof(json.c_str() + at + key.size() + 4);
+}
+
 }  // namespace prtsub::test

@@ -331,6 +331,33 @@ TEST_F(Cli, EvalAndCompareWriteTheirTablesAndReports) {
   testing::internal::GetCapturedStderr();
 }
 
+TEST_F(Cli, ABouncedAssetIsJudgedAndRenderedAgainstBouncedLightAtItsOwnAlbedo) {
+  const std::string in = scene(), direct = dir.path("d.ply"), bounced = dir.path("b.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", direct, "--rays", "32"}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", bounced, "--rays", "32", "--bounces", "2", "--albedo", "0.6"}), 0);
+  ASSERT_EQ(run({"eval", bounced, "--source", in, "--points", "300", "--paths", "64", "--report", dir.path("e.json")}), 0);
+  ASSERT_EQ(run({"eval", direct, "--source", in, "--points", "300", "--report", dir.path("d.json")}), 0);
+  for (const std::string& a : {direct, bounced})
+    ASSERT_EQ(run({"render", a, "--light", "const:1,1,1", "--reference", "--size", "48,36", "--rays", "64", "-o", a + ".png", "--albedo",
+                   "0.6", "--report", a + ".json"}),
+              0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("bounced:    2 bounces at albedo 0.6: 64 paths per point through the source"), std::string::npos) << out;
+  const std::string e = read_file_bytes(dir.path("e.json")), d = read_file_bytes(dir.path("d.json"));
+  EXPECT_EQ(test::json_number(e, "reference_bounces"), 2);
+  EXPECT_EQ(test::json_number(e, "albedo"), 0.6);
+  EXPECT_EQ(test::json_number(e, "reference_paths"), 64);
+  EXPECT_EQ(test::json_number(d, "reference_bounces"), 0);
+  EXPECT_TRUE(std::isnan(test::json_number(d, "reference_paths")));
+  // The ground under the sphere receives the sphere's light: the bounced reference frame is the
+  // brighter one, and says what it traced.
+  const std::string rb = read_file_bytes(bounced + ".json"), rd = read_file_bytes(direct + ".json");
+  EXPECT_GT(test::json_number(rb, "mean_radiance"), 1.01 * test::json_number(rd, "mean_radiance"));
+  EXPECT_EQ(test::json_number(rb, "reference_bounces"), 2);
+  EXPECT_EQ(test::json_number(rb, "reference_albedo"), 0.6);
+}
+
 TEST_F(Cli, ABudgetBelowTheInputSimplifiesAndEvalLocatesItsPointsByClosestPoint) {
   const std::string in = dir.path("dense.obj"), asset = dir.path("s.ply");
   test::write_obj(in, test::merge(test::icosphere(2), test::transformed(test::grid(8), 5.0, Eigen::Vector3d(-2.5, -2.5, -1))));

@@ -57,6 +57,28 @@ RawMesh icosphere(int levels) {
   return m;
 }
 
+RawMesh bowl(int levels) {
+  const RawMesh sphere = icosphere(levels);
+  RawMesh m;
+  m.positions = sphere.positions;
+  m.face_offsets.push_back(0);
+  for (size_t f = 0; f + 1 < sphere.face_offsets.size(); ++f) {
+    const int64_t* c = &sphere.face_indices[sphere.face_offsets[f]];
+    double z = 0;
+    for (int k = 0; k < 3; ++k) z += sphere.positions(c[k], 2) / 3;
+    if (z > 0.02) continue;
+    m.face_indices.insert(m.face_indices.end(), {c[0], c[2], c[1]});  // reversed: facing inwards
+    m.face_offsets.push_back(m.face_indices.size());
+  }
+  return m;
+}
+
+RawMesh closed_room() {
+  RawMesh room = cube();
+  for (size_t f = 0; f + 1 < room.face_offsets.size(); ++f) std::swap(room.face_indices[room.face_offsets[f] + 1], room.face_indices[room.face_offsets[f] + 2]);
+  return room;
+}
+
 RawMesh cube() {
   RawMesh m;
   m.positions.resize(8, 3);

@@ -11,6 +11,11 @@ namespace prtsub::test {
 RawMesh icosphere(int levels);
 //! An axis-aligned unit cube [0,1]^3 with outward winding, 12 triangles.
 RawMesh cube();
+//! The lower half of icosphere(levels), wound so its normals face the centre: a bowl open
+//! upwards. From inside it a ray either leaves through the opening or hits the inside.
+RawMesh bowl(int levels);
+//! The unit cube wound inwards: a closed room, every ray from inside blocked.
+RawMesh closed_room();
 //! A square in the plane z = height spanning [-half, half]^2 (or [x0, half] in x), facing `up`.
 RawMesh quad(double half, double height, bool facing_up, double x0 = NAN);
 //! An n×n grid over [0,1]² at z = 0 facing +z, two triangles per cell (split along the diagonal

@@ -16,23 +16,7 @@
 namespace prtsub {
 namespace {
 
-// The lower half of a subdivided icosphere, wound so its normals face the centre: a bowl open
-// upwards. From inside it a ray either leaves through the opening or hits the inside.
-Mesh bowl() {
-  const RawMesh sphere = test::icosphere(3);
-  RawMesh m;
-  m.positions = sphere.positions;
-  m.face_offsets.push_back(0);
-  for (size_t f = 0; f + 1 < sphere.face_offsets.size(); ++f) {
-    const int64_t* c = &sphere.face_indices[sphere.face_offsets[f]];
-    double z = 0;
-    for (int k = 0; k < 3; ++k) z += sphere.positions(c[k], 2) / 3;
-    if (z > 0.02) continue;
-    m.face_indices.insert(m.face_indices.end(), {c[0], c[2], c[1]});  // reversed: facing inwards
-    m.face_offsets.push_back(m.face_indices.size());
-  }
-  return test::build(m);
-}
+Mesh bowl() { return test::build(test::bowl(3)); }
 
 double mean_t0_error(const Mesh& mesh, const RowMatrixXd& t) {
   const double want = std::sqrt(M_PI) / 2;  // t0 of an unoccluded point: radiance 1 under light 1 at albedo 1
@@ -67,9 +51,7 @@ TEST(Interreflection, AWhiteFurnaceConvergesGeometricallyToTheLightsRadiance) {
 TEST(Interreflection, AClosedRoomLitByNothingStaysBlackAfterAnyBounces) {
   // The unit cube wound inwards: a room with no opening. Every ray is blocked, so the direct
   // transfer is the estimator's zero, and bouncing zero gives zero at any albedo.
-  RawMesh room = test::cube();
-  for (size_t f = 0; f + 1 < room.face_offsets.size(); ++f) std::swap(room.face_indices[room.face_offsets[f] + 1], room.face_indices[room.face_offsets[f] + 2]);
-  const Mesh mesh = test::build(room, 0);
+  const Mesh mesh = test::build(test::closed_room(), 0);
   const RayScene scene(mesh.positions, position_triangles(mesh));
   TransferOptions t;
   t.order = 3, t.rays = 64;

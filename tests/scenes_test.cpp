@@ -191,3 +191,58 @@ TEST(ScenesFit, CornellBoxOrdersLsqBelowAverageBelowPoint) {
 
 }  // namespace
 }  // namespace prtsub
+
+#include "prtsub/prt/evaluate.h"
+#include "prtsub/prt/path_transfer.h"
+
+namespace prtsub {
+namespace {
+
+// eval's interreflected reference (shadowed transfer, plus the bounced light traced as paths with
+// a control variate at each bounce) against brute-force path tracing: the textbook estimator of
+// all of t_B, direct light included, with no control variate. Both estimate one function, each
+// with its variance (the direct part's from its halves, the paths' from their spread); if they
+// agree, the mean squared difference over points is the sum of the variances (ratio 1), and a
+// bias the size of the noise would make it 2. With 300 points × 16 coefficients the ratio's own
+// spread is a few percent. Bounces 0 checks the path tracer's rays against transfer.cpp's.
+class ScenesBounceReference : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ScenesBounceReference, AgreesWithBruteForcePathTracingWithinItsNoise) {
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  const Mesh m = load_mesh(dir + "/" + GetParam());
+  const RayScene scene(m.positions, position_triangles(m));
+  ReferenceOptions ro;
+  ro.points = 300, ro.rays = 2, ro.noise_points = 0;
+  const Reference at = make_reference(m, scene, ro);  // only its points
+  const RowMatrixX3d corners = vertex_positions(m);
+  const PathSurface surface{corners, m.normals, m.triangles};
+  const int order = 4;
+  for (const int bounces : {0, 3}) {
+    TransferOptions t;
+    t.order = order, t.rays = 2048, t.seed = 5;
+    std::vector<double> var_direct, var_bounced(static_cast<size_t>(at.points.rows()), 0.0), var_brute;
+    RowMatrixXd reference = shadowed_transfer(scene, at.points, at.normals, t, nullptr, {}, nullptr, &var_direct);
+    PathOptions p;
+    p.order = order, p.paths = 2048, p.bounces = bounces, p.seed = 6;
+    if (bounces > 0) reference += path_traced_transfer(scene, surface, at.points, at.normals, p, &var_bounced);
+    p.paths = 1 << 15, p.plain = true, p.seed = 7;
+    const RowMatrixXd brute = path_traced_transfer(scene, surface, at.points, at.normals, p, &var_brute);
+    double diff2 = 0, var = 0;
+    for (Eigen::Index i = 0; i < at.points.rows(); ++i) {
+      const auto k = static_cast<size_t>(i);
+      diff2 += (reference.row(i) - brute.row(i)).squaredNorm();
+      var += var_direct[k] + var_bounced[k] + var_brute[k];
+    }
+    const double ratio = diff2 / var, unit = unshadowed_norm(order), n = static_cast<double>(at.points.rows());
+    std::printf("%s, %d bounces: RMS difference %.3f%%, expected from the noise %.3f%%, ratio %.3f\n", GetParam(), bounces,
+                100 * std::sqrt(diff2 / n) / unit, 100 * std::sqrt(var / n) / unit, ratio);
+    EXPECT_LT(ratio, 1.3) << bounces;
+    EXPECT_GT(ratio, 0.7) << bounces;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(CornellAndHouse, ScenesBounceReference, ::testing::Values("cornell_box.obj", "house_on_site.obj"));
+
+}  // namespace
+}  // namespace prtsub
