@@ -7,6 +7,7 @@
 #include "cli/options.h"
 #include "cli/report.h"
 #include "prtsub/prt/bake.h"
+#include "prtsub/prt/interreflection.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/random.h"
@@ -118,6 +119,60 @@ Report bench_transfer(const Mesh& mesh, const BakeOptions& b, bool at_samples, i
   return r;
 }
 
+// One bounce pass as the bake runs it without the cache (closest hits, then the previous pass
+// interpolated at each), against the bare closest-hit loop over the same rays; and the direct
+// stage's bare occlusion loop from the same vertices, for what a pass costs against a direct one.
+Report bench_bounce(const Mesh& mesh, const BakeOptions& b, int repeat) {
+  Stopwatch clock;
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  const double t_scene = clock.lap();
+  BounceOptions o = b.bounce;
+  o.bounces = 1, o.until_converged = false, o.cache = BounceCache::Off;
+  o.rays = b.transfer.rays, o.seed = b.transfer.seed, o.threads = b.transfer.threads;
+  const RowMatrixXd previous = RowMatrixXd::Zero(static_cast<Eigen::Index>(mesh.num_vertices()), sh_count(b.transfer.order));
+  const RowMatrixX3d points = vertex_positions(mesh), offsets = vertex_offset_directions(mesh);
+  double best_pass = INFINITY, best_bare = INFINITY, best_direct = INFINITY;
+  uint64_t rays = 0, hits = 0;
+  std::printf("  %zu vertices, order %d, %d rays each\n", mesh.num_vertices(), b.transfer.order, o.rays);
+  for (int i = 0; i < repeat; ++i) {
+    TransferStats bare, direct;
+    BounceStats pass;
+    hits = bare_bounce_loop(mesh, scene, o, &bare);
+    interreflected_transfer(mesh, scene, previous, o, &pass);
+    bare_occlusion_loop(scene, points, mesh.normals, b.transfer, &direct, &offsets);
+    rays = bare.rays;
+    best_bare = std::min(best_bare, bare.seconds), best_pass = std::min(best_pass, pass.seconds);
+    best_direct = std::min(best_direct, direct.seconds);
+    std::printf("  run %d: bare closest-hit %.3f s, bounce pass %.3f s, bare occlusion %.3f s\n", i + 1, bare.seconds, pass.seconds,
+                direct.seconds);
+  }
+  Report r;
+  r.set("command", "bench --at bounces");
+  r.set("order", b.transfer.order);
+  r.set("rays_per_vertex", o.rays);
+  r.set("threads", b.transfer.threads);
+  r.set("vertices", mesh.num_vertices());
+  r.set("triangles", mesh.num_faces());
+  r.set("at", "bounces");
+  r.set("rays", rays);
+  r.set("repeat", repeat);
+  r.set("hit_fraction", static_cast<double>(hits) / static_cast<double>(rays));
+  r.set("seconds_scene", t_scene);
+  r.set("seconds_bounce_pass_best", best_pass);
+  r.set("seconds_bare_best", best_bare);
+  r.set("seconds_bare_occlusion_best", best_direct);
+  r.set("bounce_mrays", static_cast<double>(rays) / best_pass / 1e6);
+  r.set("bare_mrays", static_cast<double>(rays) / best_bare / 1e6);
+  r.set("bare_occlusion_mrays", static_cast<double>(rays) / best_direct / 1e6);
+  r.set("bounce_over_bare", best_bare / best_pass);
+  r.set("bounce_over_occlusion", best_direct / best_pass);
+  r.print(stdout, {"  bare loop:  {bare_mrays:2} Mrays/s (closest hit); {bare_occlusion_mrays:2} Mrays/s (occlusion, the direct stage's)",
+                   "  bounce:     {bounce_mrays:2} Mrays/s ({bounce_over_bare:%1} of the closest-hit loop, {bounce_over_occlusion:%1} of "
+                   "the occlusion loop)",
+                   "  hits:       {hit_fraction:%1} of rays; scene build {seconds_scene:3} s"});
+  return r;
+}
+
 }  // namespace
 
 int cmd_bench(int argc, char** argv) {
@@ -130,12 +185,13 @@ int cmd_bench(int argc, char** argv) {
                  "from the same points with the same threads, alternating runs; the best run of each counts.");
   cli.add_common(args);
   args.option("--repeat", "N", "runs of each, alternated", &repeat, 1, 100);
-  args.option("--at", "vertices|samples", "trace from the vertices, or from the fit's surface samples [default vertices]", &at);
+  args.option("--at", "vertices|samples|bounces", "trace from the vertices, or from the fit's surface samples, or time one\n"
+              "bounce pass (interreflection) against a bare closest-hit loop [default vertices]", &at);
   args.flag("--solve", "instead, time the least-squares fit's assembly, factorisation and solve for order² right-hand\n"
             "sides (values need no rays: the cost does not depend on them)", &solve);
   cli.add_fit(args);
   if (!args.parse(argc, argv, 2)) return 0;
-  if (at != "vertices" && at != "samples") throw UsageError("--at: unknown value '" + at + "' (vertices, samples)");
+  if (at != "vertices" && at != "samples" && at != "bounces") throw UsageError("--at: unknown value '" + at + "' (vertices, samples, bounces)");
   const BakeOptions options = resolve_bake_options(cli.options());  // samples as bake() places them
   if (!cli.report.empty()) check_writable(cli.report);
 
@@ -143,7 +199,9 @@ int cmd_bench(int argc, char** argv) {
   const Mesh mesh = load_mesh(cli.input, cli.load);
   const double t_load = clock.lap();
   std::printf("prtsub bench%s: %s, %zu vertices\n", solve ? " --solve" : "", cli.input.c_str(), mesh.num_vertices());
-  Report r = solve ? bench_solve(mesh, options, repeat) : bench_transfer(mesh, options, at == "samples", repeat);
+  Report r = solve ? bench_solve(mesh, options, repeat)
+             : at == "bounces" ? bench_bounce(mesh, options, repeat)
+                               : bench_transfer(mesh, options, at == "samples", repeat);
   r.set("input", cli.input);
   r.set("seconds_load", t_load);
   r.set("peak_memory_mib", peak_memory_mib());

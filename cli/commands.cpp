@@ -462,6 +462,11 @@ int cmd_eval(int argc, char** argv) {
   args.option("--seed", "S", "reference seed; keep it fixed to compare assets", &ro.seed);
   args.option("--paths", "P", "an asset baked with --bounces: paths per point tracing the reference's bounced light (0: --rays)",
               &ro.paths, 0, 1 << 20);
+  int reference_bounces = -1;
+  double reference_albedo = -1;
+  args.option("--reference-bounces", "N", "judge against N bounces instead of the asset's own count (0: direct light only)",
+              &reference_bounces, 0, 64);
+  args.option("--reference-albedo", "A", "with --reference-bounces: the albedo (default the asset's, else 0.8)", &reference_albedo, 0.0, 1.0);
   add_threads_option(args, ro.threads);
   add_report_option(args, report);
   if (!args.parse(argc, argv, 2)) return 0;
@@ -477,6 +482,9 @@ int cmd_eval(int argc, char** argv) {
   // A bounced asset is judged against bounced light at its own count and albedo.
   const AssetBounces bounces = asset_bounces(asset, input);
   ro.bounces = bounces.bounces, ro.albedo = bounces.albedo;
+  // How far from interreflected light a direct-only asset is, say: another count than the asset's.
+  if (reference_bounces >= 0) ro.bounces = reference_bounces;
+  if (reference_albedo >= 0) ro.albedo = reference_albedo;
   const Mesh src = load_mesh(source, LoadOptions{crease});
   const RayScene scene(src.positions, position_triangles(src));
   const Reference ref = make_reference(src, scene, ro);
@@ -500,6 +508,7 @@ int cmd_eval(int argc, char** argv) {
   r.set("reference_rays", ro.rays);
   r.set("unlocated_points", e.unlocated);
   r.set("reference_bounces", ref.bounces);
+  r.set("asset_bounces", bounces.bounces);
   if (ref.bounces > 0) {
     r.set("albedo", ro.albedo);
     r.set("reference_paths", ref.paths);

@@ -14,6 +14,7 @@
 // traces the same rays again and finds the same hits.
 #include "prtsub/prt/interreflection.h"
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -45,9 +46,10 @@ struct Hit {
 
 constexpr uint64_t kBounceSeed = 0xB0B0CE5EEDull;
 
-// The R hits of vertex i, in ray order.
-void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<Eigen::Vector3d>& face_normal,
-                  const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
+// Vertex i's R rays, in ray order, as one stream for rtcIntersect1M (they share an origin), and
+// their directions.
+void vertex_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<uint32_t>& generators,
+                 uint32_t R, uint64_t seed, uint32_t i, std::vector<RTCRayHit>& rays, std::vector<Eigen::Vector3d>& dirs) {
   Eigen::Vector3d n = mesh.normals.row(i).transpose(), t, b;
   tangent_frame(n, t, b);
   const Eigen::Vector3f local = scene.to_local(mesh.point(i));
@@ -55,9 +57,6 @@ void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& o
   const Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
   Rng rng(mix64(seed ^ kBounceSeed), i);
   const double shift[2] = {rng.uniform(), rng.uniform()};
-  // The vertex's rays go to Embree as one stream (rtcIntersect1M): they share an origin.
-  thread_local std::vector<RTCRayHit> rays;
-  thread_local std::vector<Eigen::Vector3d> dirs;
   rays.resize(R), dirs.resize(R);
   for (uint32_t k = 0; k < R; ++k) {
     const Eigen::Vector2d uv = doubling_lattice_point(k, R, generators);
@@ -68,9 +67,21 @@ void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& o
     rays[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rays[k].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   }
+}
+
+void intersect(const RayScene& scene, std::vector<RTCRayHit>& rays) {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  rtcIntersect1M(scene.handle(), &context, rays.data(), R, sizeof(RTCRayHit));
+  rtcIntersect1M(scene.handle(), &context, rays.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRayHit));
+}
+
+// The R hits of vertex i, in ray order.
+void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<Eigen::Vector3d>& face_normal,
+                  const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
+  thread_local std::vector<RTCRayHit> rays;
+  thread_local std::vector<Eigen::Vector3d> dirs;
+  vertex_rays(mesh, scene, offsets, generators, R, seed, i, rays, dirs);
+  intersect(scene, rays);
   for (uint32_t k = 0; k < R; ++k) {
     const RTCHit& hit = rays[k].hit;
     Hit& h = out[k];
@@ -156,6 +167,29 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
   s.seconds = clock.total();
   if (stats) *stats = s;
   return total;
+}
+
+uint64_t bare_bounce_loop(const Mesh& mesh, const RayScene& scene, const BounceOptions& o, TransferStats* stats) {
+  if (o.rays < 1 || o.rays > (1 << 16)) throw InputError("bounce rays per vertex must be between 1 and 65536, got " + std::to_string(o.rays));
+  const auto R = static_cast<uint32_t>(o.rays);
+  const std::vector<uint32_t> generators = doubling_generators(R, 0);
+  const RowMatrixX3d offsets = vertex_offset_directions(mesh);
+  std::atomic<uint64_t> hits{0};
+  const Stopwatch clock;
+  parallel_range<size_t>(mesh.num_vertices(), o.threads, 16, [&](const tbb::blocked_range<size_t>& range) {
+    thread_local std::vector<RTCRayHit> rays;
+    thread_local std::vector<Eigen::Vector3d> dirs;
+    uint64_t local = 0;
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      vertex_rays(mesh, scene, offsets, generators, R, o.seed, static_cast<uint32_t>(i), rays, dirs);
+      intersect(scene, rays);
+      for (const RTCRayHit& r : rays) local += r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+    hits += local;
+  });
+  scene.check("tracing benchmark bounce rays");
+  if (stats) stats->seconds = clock.total(), stats->rays = uint64_t(mesh.num_vertices()) * R;
+  return hits.load();
 }
 
 }  // namespace prtsub

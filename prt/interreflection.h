@@ -54,4 +54,9 @@ struct BounceStats {
 RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& options,
                                     BounceStats* stats = nullptr);
 
+//! The baseline for benchmarks: one pass's rays (the same directions from the same vertices, with
+//! the same threads) through Embree's closest-hit query, with nothing done but counting hits.
+//! \return the number of rays that hit anything
+uint64_t bare_bounce_loop(const Mesh& mesh, const RayScene& scene, const BounceOptions& options, TransferStats* stats = nullptr);
+
 }  // namespace prtsub

@@ -152,6 +152,23 @@ TEST_F(Cli, EvalFitsReportsThePapersFourErrorsAndBenchTimesTheFit) {
   EXPECT_NE(read_file_bytes(dir.path("b.json")).find("\"at\": \"samples\""), std::string::npos);
 }
 
+TEST_F(Cli, BenchTimesABouncePassAgainstTheBareClosestHitLoopOverTheSameRays) {
+  // Every ray from inside a closed room hits; from a plate under the open sky, none does.
+  const std::string room = dir.path("room.obj"), plate = dir.path("plate.obj");
+  test::write_obj(room, test::closed_room());
+  test::write_obj(plate, test::quad(1.0, 0.0, true));
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bench", room, "--at", "bounces", "--rays", "32", "--repeat", "2", "--crease-angle", "0", "--report", dir.path("r.json")}), 0);
+  ASSERT_EQ(run({"bench", plate, "--at", "bounces", "--rays", "32", "--repeat", "1", "--report", dir.path("p.json")}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("of the closest-hit loop"), std::string::npos) << out;
+  const std::string r = read_file_bytes(dir.path("r.json")), p = read_file_bytes(dir.path("p.json"));
+  EXPECT_EQ(test::json_number(r, "hit_fraction"), 1.0);
+  EXPECT_EQ(test::json_number(p, "hit_fraction"), 0.0);
+  EXPECT_EQ(test::json_number(r, "rays"), 32 * test::json_number(r, "vertices"));
+  EXPECT_GT(test::json_number(r, "bounce_over_bare"), 0.0);
+}
+
 TEST_F(Cli, BadInputExitsNonZeroAndLeavesNoOutput) {
   test::write_text(dir.path("nan.obj"), "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
   test::write_text(dir.path("empty.obj"), "");
