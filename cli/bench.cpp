@@ -193,6 +193,7 @@ int cmd_bench(int argc, char** argv) {
   if (!args.parse(argc, argv, 2)) return 0;
   if (at != "vertices" && at != "samples" && at != "bounces") throw UsageError("--at: unknown value '" + at + "' (vertices, samples, bounces)");
   const BakeOptions options = resolve_bake_options(cli.options());  // samples as bake() places them
+  require_fixed_order(options, "bench");
   if (!cli.report.empty()) check_writable(cli.report);
 
   Stopwatch clock;

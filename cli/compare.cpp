@@ -412,6 +412,7 @@ int cmd_compare(int argc, char** argv) {
   int fw = 0, fh = 0;
   parse_size(c.frame_size, "--frame-size", fw, fh);
   const BakeOptions base = resolve_bake_options(c.bake.options());
+  require_fixed_order(base, "compare");
   {
     std::error_code ec;
     std::filesystem::create_directories(c.out_dir, ec);

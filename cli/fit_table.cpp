@@ -82,6 +82,7 @@ int cmd_eval_fits(int argc, char** argv) {
   if (!args.parse(argc, argv, 2)) return 0;
   if (!cli.report.empty()) check_writable(cli.report);
   const BakeOptions b = resolve_bake_options(cli.options());
+  require_fixed_order(b, "eval --fits");
   const bool ao = b.signal == AssetSignal::Ao;
   if (b.bounce.bounces > 0 || b.bounce.until_converged) throw UsageError("eval --fits: compares fits of direct transfer; --bounces does not apply");
 

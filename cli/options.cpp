@@ -1,5 +1,6 @@
 #include "cli/options.h"
 
+#include "cli/specs.h"
 #include "prtsub/prt/sh.h"
 
 namespace prtsub {
@@ -27,8 +28,19 @@ void BakeCli::add_common(ArgParser& args) {
   args.positional("INPUT", "mesh file: .obj, .ply (ASCII or binary), .off or .stl", &input);
   args.option("--crease-angle", "DEG", "computed normals: sharper edges are creases; 0 is flat shading", &load.crease_angle_deg,
               0.0, 180.0);
-  add_transfer_options(args, bake.transfer);
+  args.option("--order", "N|auto", "SH order: N bands, N² coefficients; auto: the lowest order whose truncation error is\n"
+              "below the bake's own noise (or --order-tolerance), from a pilot of the vertices [default 4]", &order_);
+  args.option("--max-order", "M", "--order auto: the highest order considered", &bake.order_choice.max_order, 2, kMaxShOrder);
+  args.option("--order-tolerance", "E", "--order auto: keep the truncation error under E percent of ||t_unshadowed|| (0: the\n"
+              "bake's noise)", &bake.order_choice.tolerance_percent, 0.0, 100.0);
+  args.option("--order-light", "SPEC", "--order auto: errors under this light turned any way (the --light syntax of render;\n"
+              "lights add up) instead of the worst light, eval's metric", &order_lights_);
+  add_transfer_options(args, bake.transfer, false);
   add_report_option(args, report);
+}
+
+void require_fixed_order(const BakeOptions& o, const char* command) {
+  if (o.order_auto) throw UsageError(std::string(command) + ": --order auto is for bake; give a number");
 }
 
 void BakeCli::add_fit(ArgParser& args) {
@@ -122,6 +134,23 @@ BakeOptions BakeCli::options() const {
     if (end != bounces_.c_str() + bounces_.size() || n < 0 || n > 64)
       throw UsageError("--bounces: expected 0 to 64 or auto, got '" + bounces_ + "'");
     o.bounce.bounces = static_cast<int>(n);
+  }
+  if (order_ == "auto") {
+    o.order_auto = true;
+  } else if (!order_.empty()) {
+    char* end = nullptr;
+    const long n = std::strtol(order_.c_str(), &end, 10);
+    if (end != order_.c_str() + order_.size() || n < 1 || n > kMaxShOrder)
+      throw UsageError("--order: expected 1 to " + std::to_string(kMaxShOrder) + " or auto, got '" + order_ + "'");
+    o.transfer.order = static_cast<int>(n);
+  }
+  if (!order_lights_.empty()) {
+    if (!o.order_auto) throw UsageError("--order-light: only with --order auto");
+    const ShLight light = parse_lights(order_lights_, o.order_choice.max_order, "--order-light");
+    o.order_choice.band_power.assign(static_cast<size_t>(o.order_choice.max_order), 0.0);
+    for (int l = 0; l < o.order_choice.max_order; ++l)
+      for (int k = l * l; k < (l + 1) * (l + 1); ++k)
+        o.order_choice.band_power[static_cast<size_t>(l)] += light.coeffs.row(k).squaredNorm() / 3;  // the channels' mean
   }
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cli/args.h"
 #include "cli/progress.h"
@@ -43,7 +44,13 @@ struct BakeCli {
  private:
   bool no_control_variate_ = false, no_noise_weighting_ = false;
   std::string bounces_;  // --bounces N|auto
+  std::string order_;    // --order N|auto
+  std::vector<std::string> order_lights_;  // --order-light SPEC
 };
+
+//! Commands that need one order before they bake (compare, bench, eval --fits) refuse --order
+//! auto. \throw UsageError naming `command`
+void require_fixed_order(const BakeOptions& options, const char* command);
 
 //! One progress line per pipeline stage, on a terminal.
 class StageProgress {

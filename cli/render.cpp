@@ -8,6 +8,7 @@
 #include "cli/specs.h"
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/render.h"
+#include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
@@ -18,6 +19,7 @@ struct RenderCli {
   std::vector<std::string> lights, rotations;
   double albedo = 0.8, exposure = 1.0;
   bool reference = false, compare_bare = false;
+  int reference_order = 0;  // 0: the asset's
   TransferOptions transfer;  // the reference's rays, seed and threads; the order is the asset's
 };
 
@@ -25,7 +27,7 @@ struct RenderCli {
 Image reference_frame(const RayScene& scene, const SurfaceHits& hits, const Asset& asset, const ShLight& light,
                       const RenderCli& c, Report& r) {
   TransferOptions topt = c.transfer;
-  topt.order = asset.order;
+  topt.order = c.reference_order > 0 ? c.reference_order : asset.order;
   TransferStats stats;
   // A bounced asset's reference bounces as the bake did, at the albedo the asset records.
   const AssetBounces b = asset_bounces(asset, c.input);
@@ -79,6 +81,8 @@ int cmd_render(int argc, char** argv) {
   args.option("--albedo", "A", "diffuse albedo", &c.albedo, 0.0, 1.0);
   args.option("--exposure", "E", "PNG only: linear radiance is multiplied by E before the sRGB curve", &c.exposure, 0.0, 1e6);
   args.flag("--reference", "render the per-pixel reference instead of the Gouraud frame", &c.reference);
+  args.option("--reference-order", "N", "the reference's SH order (and the light's), to see what the asset's order leaves out\n"
+              "[default the asset's]", &c.reference_order, 0, kMaxShOrder);
   add_transfer_options(args, c.transfer, false);
   args.flag("--compare-bare", "reference: also time a bare Embree loop over the same rays (report: bare_rays_per_second)", &c.compare_bare);
   add_report_option(args, c.report);
@@ -97,7 +101,8 @@ int cmd_render(int argc, char** argv) {
   Report r;
   const Asset asset = read_asset(c.input);
   r.set("seconds_load", clock.lap());
-  ShLight light = parse_lights(c.lights, asset.order);
+  if (c.reference_order > 0 && !c.reference) throw UsageError("render: --reference-order needs --reference");
+  ShLight light = parse_lights(c.lights, c.reference_order > 0 ? c.reference_order : asset.order);
   for (const Eigen::Matrix3d& rotation : rotations) light = rotate_light(light, rotation);
   const Camera camera = c.camera == "auto" ? auto_camera(bounds(asset.positions), width, height) : given_camera;
   r.set("seconds_light", clock.lap());

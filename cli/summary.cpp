@@ -121,8 +121,33 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
 
 void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   const Mesh& mesh = res.mesh;
-  r.set("order", o.signal == AssetSignal::Ao ? 1 : o.transfer.order);
-  r.set("coefficients", o.signal == AssetSignal::Ao ? 1 : sh_count(o.transfer.order));
+  const int order = o.signal == AssetSignal::Ao ? 1 : res.order.order > 0 ? res.order.order : o.transfer.order;
+  r.set("order", order);
+  r.set("coefficients", sh_count(order));
+  r.set("order_auto", res.order.order > 0);
+  if (res.order.order > 0) {
+    const OrderChoice& c = res.order;
+    r.set("order_truncation_percent", c.truncation_percent[static_cast<size_t>(c.order - 1)]);
+    r.set("order_tolerance_percent", c.tolerance_percent);
+    r.set("order_reached", c.reached);
+    r.set("order_pilot_points", c.points);
+    r.set("order_pilot_rays", c.rays);
+    r.set("order_max", static_cast<int>(c.truncation_percent.size()));
+    r.set("seconds_order", c.seconds);
+    for (size_t n = 0; n < c.truncation_percent.size(); ++n) {
+      r.set("order_truncation_percent_" + std::to_string(n + 1), c.truncation_percent[n]);
+      r.set("order_noise_percent_" + std::to_string(n + 1), c.noise_percent[n]);
+    }
+    std::string table;
+    for (size_t n = 0; n < c.truncation_percent.size(); ++n) {
+      char cell[64];
+      std::snprintf(cell, sizeof cell, "%s%zu: %.2f/%.2f", n ? ", " : "", n + 1, c.truncation_percent[n], c.noise_percent[n]);
+      table += cell;
+    }
+    r.set("order_table", table);
+    r.set("order_why", c.reached ? (o.order_choice.tolerance_percent > 0 ? "within --order-tolerance" : "below the bake's own noise at that order")
+                                 : "not known at --max-order, and no lower order got below its tolerance");
+  }
   r.set("rays_per_vertex", o.transfer.rays);
   r.set("seed", o.transfer.seed);
   r.set("crease_angle", mesh.crease_angle_deg);
@@ -244,6 +269,10 @@ void print_bake_summary(const Report& r) {
                      "clamped into [0, 1]"});
   else
     r.print(stdout, {"  transfer:   order {order} ({coefficients} coefficients), {rays_per_vertex} rays per vertex, seed {seed}"});
+  if (r.format("{order_auto}") == "yes")
+    r.print(stdout, {"  order auto: {order}: what it leaves out, {order_truncation_percent:3}% of ||t_unshadowed||, is {order_why} "
+                     "({order_tolerance_percent:3}%); pilot of {order_pilot_points} vertices, {seconds_order:3} s",
+                     "              per order, truncation/noise %: {order_table}"});
   if (r.number("bounces") > 0)
     r.print(stdout, {"  bounces:    {bounces} of interreflection, albedo {albedo}; the last added {bounce_change_percent:3}% of "
                      "||t_unshadowed|| ({bounce_rays} rays, {seconds_bounce:3} s)"});

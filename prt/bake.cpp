@@ -54,6 +54,7 @@ void check_bake_options(const BakeOptions& o) {
   if (!(o.bounce.albedo >= 0 && o.bounce.albedo <= 1)) throw InputError("albedo must be between 0 and 1, got " + std::to_string(o.bounce.albedo));
   if (o.bounce.bounces > 0 && o.signal == AssetSignal::Ao)
     throw InputError("interreflection is for transfer assets: ambient occlusion is visibility, not light");
+  if (o.order_auto && o.signal == AssetSignal::Ao) throw InputError("--order auto is for transfer assets: ambient occlusion has one coefficient");
   if (o.sample_rays < 1 || o.sample_rays > (1 << 20))
     throw InputError("rays per sample must be between 1 and 1048576, got " + std::to_string(o.sample_rays));
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
@@ -147,6 +148,14 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   m.push_back({"crease_angle", std::to_string(r.mesh.crease_angle_deg)});
   m.push_back({"normals", r.mesh.normals_from_file ? "file" : "computed"});
   m.push_back({"estimator", "cosine-lattice cross-fitted-control-variate"});
+  if (o.order_auto && r.order.order > 0) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%d (what it leaves out, %.3f%% of ||t_unshadowed||, %s %.3f%%%s; pilot of %zu vertices to order %d)",
+                  r.order.order, r.order.truncation_percent[static_cast<size_t>(r.order.order - 1)], r.order.reached ? "is within" : "exceeds",
+                  r.order.tolerance_percent, o.order_choice.tolerance_percent > 0 ? ", the tolerance" : ", the bake's own noise at that order",
+                  r.order.points, o.order_choice.max_order);
+    m.push_back({"order_auto", buf});
+  }
   m.push_back({"refine", refinement_name(o.refine)});
   if (o.refine == Refinement::Auto)
     m.push_back({"auto", "simplified to " + std::to_string(r.simplify.faces_after) + " triangles (share " + std::to_string(o.auto_share) +
@@ -501,7 +510,7 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions
 }
 
 BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress& progress) {
-  const BakeOptions o = resolve_bake_options(options);
+  BakeOptions o = resolve_bake_options(options);
   check_bake_options(o);
   if (o.transfer.log) check_fixed_mesh(o);
   Stopwatch clock;
@@ -512,10 +521,18 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   r.seconds_scene = clock.lap();
   TransferStats stats;
   const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
+  if (o.order_auto) {
+    // Before anything is traced: every later stage (and every shard) runs at the chosen order.
+    if (progress.stage) progress.stage("order", 0);
+    r.order = choose_order(scene, vertex_positions(r.mesh), r.mesh.normals, offsets, o.transfer, o.order_choice);
+    o.transfer.order = r.order.order;
+    r.rays += r.order.rays;
+    clock.lap();
+  }
   if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
   r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, o.transfer, &stats, progress.add, &offsets,
                                  &r.point_variance);
-  r.rays = stats.rays;
+  r.rays += stats.rays;
   r.seconds_transfer = clock.lap();
   if (o.refine == Refinement::Adaptive) {
     if (o.adaptive.budget < r.mesh.num_faces()) {

@@ -19,6 +19,7 @@
 #include "prtsub/prt/error_estimate.h"
 #include "prtsub/prt/fit.h"
 #include "prtsub/prt/interreflection.h"
+#include "prtsub/prt/order_choice.h"
 #include "prtsub/prt/refine_signal.h"
 #include "prtsub/prt/sample_plan.h"
 #include "prtsub/prt/vertex_top_up.h"
@@ -47,6 +48,10 @@ struct BakeOptions {
   //! Order, rays, seed and threads of the vertices' transfer. AO bakes force order 1; the
   //! samples' seed and the fit's threads derive from these.
   TransferOptions transfer;
+  //! --order auto: transfer.order is chosen from a pilot of the vertices before anything else is
+  //! traced (order_choice.h); transfer.order is then ignored. Transfer assets only.
+  bool order_auto = false;
+  OrderChoiceOptions order_choice;
   AssetSignal signal = AssetSignal::Transfer;  //!< Ao: order-1 transfer, written as ambient occlusion
   Refinement refine = Refinement::None;
   RefineOptions adaptive;                      //!< Adaptive: budget (required), batch, max_edge
@@ -126,6 +131,7 @@ struct BakeResult {
   uint64_t target_sample_rays = 0;  //!< ... and their rays
   FitStats fit;
   BounceStats bounce;    //!< interreflection's passes (none when bounce.bounces is 0)
+  OrderChoice order;     //!< --order auto: the order chosen and why (order 0 otherwise)
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
   uint64_t rays = 0;     //!< every transfer ray traced
   double seconds_scene = 0, seconds_transfer = 0, seconds_refine = 0, seconds_samples = 0, seconds_top_up = 0, seconds_target = 0, seconds_fit = 0, seconds_bounce = 0,

@@ -46,6 +46,10 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s.precision(17);
   s << "version " << kVersion << "\nformat " << lower(fs::path(output).extension().string()) << "\n";
   s << "order " << o.transfer.order << " rays " << o.transfer.rays << " seed " << o.transfer.seed << "\n";
+  s << "order_auto " << o.order_auto << " " << o.order_choice.max_order << " " << o.order_choice.tolerance_percent << " "
+    << o.order_choice.pilot_points;
+  for (double p : o.order_choice.band_power) s << " " << p;
+  s << "\n";
   s << "signal " << asset_signal_name(o.signal) << " refine " << refinement_name(o.refine) << "\n";
   s << "adaptive " << o.adaptive.budget << " " << o.adaptive.batch << " " << o.adaptive.max_edge << " " << estimate_name(o.estimate) << "\n";
   s << "uniform " << o.uniform.levels << " " << uniform_scheme_name(o.uniform.scheme) << "\n";

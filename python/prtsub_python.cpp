@@ -104,7 +104,11 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
   BakeOptions o;
   for (const auto& [key_handle, value] : kw) {
     const std::string key = py::cast<std::string>(key_handle);
-    if (key == "order") o.transfer.order = value.cast<int>();
+    if (key == "order") {
+      if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.order_auto = true;
+      else o.transfer.order = value.cast<int>();
+    } else if (key == "max_order") o.order_choice.max_order = value.cast<int>();
+    else if (key == "order_tolerance") o.order_choice.tolerance_percent = value.cast<double>();
     else if (key == "rays") o.transfer.rays = value.cast<int>();
     else if (key == "seed") o.transfer.seed = value.cast<uint64_t>();
     else if (key == "threads") o.transfer.threads = value.cast<int>();
@@ -127,7 +131,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, rays, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
+                           "' (order, max_order, order_tolerance, rays, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");
@@ -145,7 +149,7 @@ PyAsset bake_mesh(const Mesh& mesh, const BakeOptions& options) {
   a.transfer = std::move(r.transfer);
   a.metadata = std::move(r.metadata);
   a.signal = options.signal;
-  a.order = options.signal == AssetSignal::Ao ? 1 : options.transfer.order;
+  a.order = options.signal == AssetSignal::Ao ? 1 : r.order.order > 0 ? r.order.order : options.transfer.order;
   a.warnings = r.warnings;
   a.finish();
   py::dict s;
@@ -163,6 +167,7 @@ PyAsset bake_mesh(const Mesh& mesh, const BakeOptions& options) {
   s["predicted_error_standard_error"] = r.predicted.standard_error;
   s["fit_samples"] = r.fit_data.samples.face.size();
   s["bounces"] = r.bounce.passes;
+  s["order"] = a.order;
   a.stats = s;
   return a;
 }
@@ -282,7 +287,7 @@ PYBIND11_MODULE(prtsub, m) {
         return bake_mesh(mesh, o);
       }, py::arg("mesh_or_vertices"), py::arg("faces") = py::none(),
       "bake(vertices, faces, **options) or bake(mesh, **options): the whole pipeline, as `prtsub bake`.\n"
-      "Options: order, rays, seed, threads, signal ('transfer'|'ao'), fit ('point'|'average'|'lsq'), alpha,\n"
+      "Options: order (N or 'auto'), max_order, order_tolerance, rays, seed, threads, signal ('transfer'|'ao'), fit ('point'|'average'|'lsq'), alpha,\n"
       "refine ('none'|'adaptive'|'uniform'), budget (below the input's count: simplify), levels, simplify_metric\n"
       "('transfer'|'geometry'), min_angle, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo, source.");
 

@@ -30,6 +30,10 @@ TEST(Batch, TheKeyChangesWithEveryOptionThatChangesTheAssetAndNotWithThreads) {
   EXPECT_EQ(bake_key(bytes, threads, "a.ply"), k0) << "results do not depend on the thread count";
   const std::vector<std::pair<const char*, std::function<void(BatchOptions&)>>> changes = {
       {"order", [](BatchOptions& o) { o.bake.transfer.order = 3; }},
+      {"order_auto", [](BatchOptions& o) { o.bake.order_auto = true; }},
+      {"max_order", [](BatchOptions& o) { o.bake.order_choice.max_order = 6; }},
+      {"order_tolerance", [](BatchOptions& o) { o.bake.order_choice.tolerance_percent = 2; }},
+      {"order_light", [](BatchOptions& o) { o.bake.order_choice.band_power = {1, 0.5}; }},
       {"rays", [](BatchOptions& o) { o.bake.transfer.rays = 128; }},
       {"seed", [](BatchOptions& o) { o.bake.transfer.seed = 1; }},
       {"signal", [](BatchOptions& o) { o.bake.signal = AssetSignal::Ao; }},

@@ -152,6 +152,29 @@ TEST_F(Cli, EvalFitsReportsThePapersFourErrorsAndBenchTimesTheFit) {
   EXPECT_NE(read_file_bytes(dir.path("b.json")).find("\"at\": \"samples\""), std::string::npos);
 }
 
+TEST_F(Cli, OrderAutoBakesAtTheOrderItChoseAndSaysWhy) {
+  const std::string in = scene(), asset = dir.path("a.ply"), sky = dir.path("s.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--order", "auto", "--rays", "16", "--fit", "point", "--report", dir.path("a.json")}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", sky, "--order", "auto", "--order-light", "const:1,1,1", "--rays", "16", "--fit", "point"}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("  order auto: "), std::string::npos) << out;
+  EXPECT_NE(out.find("per order, truncation/noise %: 1: "), std::string::npos) << out;
+  const std::string j = read_file_bytes(dir.path("a.json"));
+  const double order = test::json_number(j, "order");
+  EXPECT_EQ(read_asset(asset).order, order);
+  EXPECT_EQ(test::json_number(j, "coefficients"), order * order);
+  EXPECT_LE(test::json_number(j, "order_truncation_percent"), test::json_number(j, "order_tolerance_percent"));
+  EXPECT_EQ(read_asset(sky).order, 1);  // a constant light needs band 0 only
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("x.ply"), "--order-light", "sky"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", dir.path("x.ply"), "--order", "eleven"}), 2);
+  EXPECT_EQ(run({"compare", in, "--order", "auto", "-o", dir.path("cmp")}), 2);
+  EXPECT_EQ(run({"bench", in, "--order", "auto"}), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("--order auto is for bake"), std::string::npos) << err;
+}
+
 TEST_F(Cli, BenchTimesABouncePassAgainstTheBareClosestHitLoopOverTheSameRays) {
   // Every ray from inside a closed room hits; from a plate under the open sky, none does.
   const std::string room = dir.path("room.obj"), plate = dir.path("plate.obj");

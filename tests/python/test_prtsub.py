@@ -156,6 +156,13 @@ class BakeTest(unittest.TestCase):
         self.assertEqual(ours.stats["bounces"], 2)
         self.assertGreater(ours.transfer[:, 0].sum(), direct.transfer[:, 0].sum())
 
+    def test_order_auto_chooses_as_the_tool_does(self):
+        sphere, ours, tools = self.bake_both("order", ["--order", "auto", "--rays", "16", "--fit", "point"], order="auto", rays=16,
+                                             fit="point")
+        self.assertEqual(ours.order, tools.order)
+        self.assertEqual(ours.stats["order"], tools.order)
+        np.testing.assert_allclose(ours.transfer, tools.transfer, rtol=0, atol=1e-6)
+
     def bake_both(self, name, cli, **options):
         """The module's bake and the tool's of the same icosphere on the ground, as (ours, the tool's asset)."""
         sphere = prtsub.mesh(*icosphere_on_ground())
