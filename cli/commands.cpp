@@ -487,7 +487,9 @@ int cmd_eval(int argc, char** argv) {
   if (reference_albedo >= 0) ro.albedo = reference_albedo;
   const Mesh src = load_mesh(source, LoadOptions{crease});
   const RayScene scene(src.positions, position_triangles(src));
-  const Reference ref = make_reference(src, scene, ro);
+  Progress progress("reference", static_cast<size_t>(ro.points) * (ro.bounces > 0 ? 2 : 1), stderr_is_terminal());
+  const Reference ref = make_reference(src, scene, ro, [&](size_t n) { progress.add(n); });
+  progress.finish();
   const double t_ref = clock.lap();
   // A simplified asset's faces do not lie in the source's: locate by closest point.
   const bool closest = meta.count("simplified") > 0;

@@ -28,7 +28,7 @@ double unshadowed_norm(int order) {
   return std::sqrt(s);
 }
 
-Reference make_reference(const Mesh& src, const RayScene& scene, const ReferenceOptions& o) {
+Reference make_reference(const Mesh& src, const RayScene& scene, const ReferenceOptions& o, const ProgressFn& progress) {
   if (o.points == 0) throw InputError("reference: the point count must be positive");
   std::vector<double> cumulative(src.num_faces() + 1, 0.0);
   for (size_t f = 0; f < src.num_faces(); ++f) {
@@ -67,7 +67,7 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
   }
   TransferOptions to;
   to.order = o.order, to.rays = o.rays, to.seed = o.seed + 1, to.threads = o.threads;
-  ref.transfer = shadowed_transfer(scene, ref.points, ref.normals, to);
+  ref.transfer = shadowed_transfer(scene, ref.points, ref.normals, to, nullptr, progress);
   // Bounced light: paths through the source, from the reference points (their own seeds).
   const PathSurface surface{corners, src.normals, src.triangles};
   PathOptions po;
@@ -75,7 +75,7 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
   po.seed = o.seed + 3, po.threads = o.threads;
   if (o.bounces > 0) {
     const Stopwatch clock;
-    ref.transfer += path_traced_transfer(scene, surface, ref.points, ref.normals, po);
+    ref.transfer += path_traced_transfer(scene, surface, ref.points, ref.normals, po, nullptr, nullptr, progress);
     ref.bounces = o.bounces, ref.paths = po.paths, ref.seconds_bounce = clock.total();
   }
   // The reference's own noise: trace the first points again with other seeds.

@@ -34,7 +34,9 @@ struct Reference {
 //! Seeded, area-stratified points on `source` (systematic sampling of cumulative area, one
 //! random offset; uniform within each triangle), transfer at each: shadowed, plus with
 //! `bounces` the light of that many bounces, traced as paths (docs/sh_convention.md).
-Reference make_reference(const Mesh& source, const RayScene& scene, const ReferenceOptions& options);
+//! \param progress told of reference points as they finish (each twice with bounces: direct
+//!        light, then the paths), not of the noise floor's second trace
+Reference make_reference(const Mesh& source, const RayScene& scene, const ReferenceOptions& options, const ProgressFn& progress = {});
 
 struct EvalResult {
   double rms_percent = 0, p95_percent = 0, noise_floor_percent = 0;
