@@ -233,13 +233,13 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
 
 // A budget below the input's: collapse where the transfer does not change. Surviving vertices
 // keep their traced transfer and its variance.
-void simplify_adaptively(const BakeOptions& o, BakeResult& r) {
+void simplify_adaptively(const BakeOptions& o, BakeResult& r, const ProgressFn& progress) {
   SimplifyOptions so = o.simplify;
   so.budget = o.adaptive.budget;
   so.value_scale = unshadowed_norm(o.transfer.order);
   std::vector<uint32_t> to;
   r.simplified = true;
-  r.simplify = simplify(r.mesh, r.transfer, so, &to);
+  r.simplify = simplify(r.mesh, r.transfer, so, &to, progress);
   std::vector<double> variance(r.mesh.num_vertices(), 0.0);
   for (size_t i = 0; i < to.size() && i < r.point_variance.size(); ++i)
     if (to[i] != UINT32_MAX) variance[to[i]] = r.point_variance[i];
@@ -264,7 +264,7 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
   down.simplify.max_surface_tolerance = down.simplify.surface_tolerance;
   if (progress.stage) progress.stage("simplify", 0);
   if (down.adaptive.budget < F) {
-    simplify_adaptively(down, r);
+    simplify_adaptively(down, r, progress.add);
     if (!r.simplify.warning.empty()) r.warnings.pop_back();  // the share is a target, not a promise
   }
   if (r.mesh.num_faces() > T) {  // it could not go below the budget on the way down: the budget is the promise
@@ -272,7 +272,7 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
     const bool ran = r.simplified;
     down.adaptive.budget = T;
     down.simplify.max_surface_tolerance = o.simplify.max_surface_tolerance;
-    simplify_adaptively(down, r);
+    simplify_adaptively(down, r, progress.add);
     if (ran) r.simplify.collapses += first.collapses, r.simplify.faces_before = first.faces_before, r.simplify.seconds += first.seconds;
   }
   if (r.mesh.num_faces() < T) refine_adaptively(scene, o, r, r.simplified && r.simplify.collapses > 0 ? &source : nullptr);
@@ -537,7 +537,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   if (o.refine == Refinement::Adaptive) {
     if (o.adaptive.budget < r.mesh.num_faces()) {
       if (progress.stage) progress.stage("simplify", 0);
-      simplify_adaptively(o, r);
+      simplify_adaptively(o, r, progress.add);
     } else {
       refine_adaptively(scene, o, r);
     }

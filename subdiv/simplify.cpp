@@ -35,7 +35,9 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModBaseT.hh>
+#include <OpenMesh/Tools/Decimater/Observer.hh>
 #include <algorithm>
+#include <functional>
 #include <cmath>
 
 #include "prtsub/subdiv/exceptions.h"
@@ -303,7 +305,27 @@ bool boundary_collapse(OMesh& m, ModTransfer& module) {
 
 namespace {
 
-SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options, std::vector<uint32_t>* removed_to) {
+// The decimater's observer, turned into collapse counts for a progress bar. The decimater counts
+// from 0 in every decimate_to_faces call; what it did not report is told when the call ends.
+class CollapseProgress : public OpenMesh::Decimater::Observer {
+ public:
+  explicit CollapseProgress(const std::function<void(size_t)>& progress) : Observer(256), progress_(progress) {}
+  void notify(size_t step) override {
+    if (progress_ && step > told_) progress_(step - told_);
+    told_ = step;
+  }
+  void finish_call(size_t collapses) {
+    if (progress_ && collapses > told_) progress_(collapses - told_);
+    told_ = 0;
+  }
+
+ private:
+  const std::function<void(size_t)>& progress_;
+  size_t told_ = 0;
+};
+
+SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options, std::vector<uint32_t>* removed_to,
+                            const std::function<void(size_t)>& progress) {
   const Stopwatch clock;
   SimplifyStats stats;
   stats.faces_before = mesh.num_faces();
@@ -388,6 +410,8 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
     decimater.add(handle);
     decimater.module(handle).set_state(&s);
     decimater.module(handle).set_binary(false);
+    CollapseProgress told(progress);
+    if (progress) decimater.set_observer(&told);
     if (!decimater.initialize()) throw InputError("simplify: OpenMesh's decimater did not initialise");
     // To target + 1 under the surface tolerance, doubling it while the guards stop short, up to
     // its maximum. The decimater counts deleted faces as faces, hence the offset.
@@ -395,6 +419,7 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
       const size_t live = live_faces(om);
       if (live <= target + 1) break;
       const size_t collapses = decimater.decimate_to_faces(0, om.n_faces() - (live - (target + 1)));
+      told.finish_call(collapses);
       stats.collapses += collapses;
       stats.surface_tolerance = s.surface_tolerance / s.diagonal;
       if (live_faces(om) <= target + 1 || 2 * s.surface_tolerance > options.max_surface_tolerance * s.diagonal * (1 + 1e-12)) break;
@@ -409,9 +434,12 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
       }
       if (done) {
         ++stats.collapses;
+        told.finish_call(1);
       } else {
         // The decimater counts deleted faces as faces: ask it for one collapse more.
-        stats.collapses += decimater.decimate_to_faces(0, om.n_faces() - 1);
+        const size_t one = decimater.decimate_to_faces(0, om.n_faces() - 1);
+        told.finish_call(one);
+        stats.collapses += one;
         if (live_faces(om) + kept.size() != options.budget)
           stats.warning = "budget " + std::to_string(options.budget) + " cannot be met exactly: no boundary collapse is left "
                           "(a closed surface has an even triangle count): " + std::to_string(live_faces(om) + kept.size());
@@ -477,9 +505,10 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
 
 }  // namespace
 
-SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options, std::vector<uint32_t>* removed_to) {
+SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options, std::vector<uint32_t>* removed_to,
+                       const std::function<void(size_t)>& progress) {
   if (!(options.max_surface_tolerance > options.surface_tolerance) || options.budget >= mesh.num_faces())
-    return simplify_once(mesh, values, options, removed_to);
+    return simplify_once(mesh, values, options, removed_to, progress);
   // First under the surface tolerance alone. Relaxing it is worth its damage only where it gets
   // there, or at least halfway from where the strict run stopped: sibenik's locked crease corners
   // stop both near 35k of a 19k budget, and the relaxed run's few hundred more collapses, each
@@ -490,10 +519,10 @@ SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& o
   SimplifyOptions strict = options;
   strict.max_surface_tolerance = options.surface_tolerance;
   std::vector<uint32_t> strict_to;
-  SimplifyStats st = simplify_once(mesh, values, strict, removed_to ? &strict_to : nullptr);
+  SimplifyStats st = simplify_once(mesh, values, strict, removed_to ? &strict_to : nullptr, progress);
   if (st.faces_after > options.budget) {
     std::vector<uint32_t> relaxed_to;
-    SimplifyStats rt = simplify_once(relaxed, relaxed_values, options, removed_to ? &relaxed_to : nullptr);
+    SimplifyStats rt = simplify_once(relaxed, relaxed_values, options, removed_to ? &relaxed_to : nullptr, progress);
     // Kept if it closes at least half the gap the strict run left.
     if (2 * (st.faces_after - std::max(rt.faces_after, options.budget)) >= st.faces_after - options.budget) {
       mesh = std::move(relaxed), values = std::move(relaxed_values), strict_to = std::move(relaxed_to), st = rt;

@@ -4,6 +4,7 @@
 // per-render-vertex values, so this room needs neither Embree nor SH.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "prtsub/subdiv/mesh.h"
@@ -64,7 +65,9 @@ struct SimplifyStats {
 //! \param values #V by K, may have no columns
 //! \param removed_to if given, receives for every input render vertex its output index, or
 //!        UINT32_MAX for removed ones
+//! \param progress if given, told of collapses as they are made (in steps of 256), by every run
+//!        (a relaxed run after the strict one counts again)
 SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options,
-                       std::vector<uint32_t>* removed_to = nullptr);
+                       std::vector<uint32_t>* removed_to = nullptr, const std::function<void(size_t collapses)>& progress = {});
 
 }  // namespace prtsub

@@ -55,8 +55,10 @@ TEST(Simplify, ReachesTheBudgetExactlyAndKeepsSurvivingVerticesAsTheyWere) {
     RowMatrixXd v = values_of(m, [](const Eigen::Vector3d& p) { return std::sin(6 * p.x()) + p.y(); }, 3);
     const RowMatrixXd v_in = v;
     std::vector<uint32_t> to;
-    SimplifyStats st = simplify(m, v, SimplifyOptions{budget}, &to);
+    size_t told = 0;
+    SimplifyStats st = simplify(m, v, SimplifyOptions{budget}, &to, [&](size_t n) { told += n; });
     EXPECT_TRUE(st.warning.empty()) << st.warning;
+    EXPECT_EQ(told, st.collapses);  // the progress bar is told of every collapse, the last one too
     EXPECT_EQ(m.num_faces(), budget);
     EXPECT_EQ(st.faces_after, budget);
     ASSERT_EQ(v.rows(), static_cast<Eigen::Index>(m.num_vertices()));
