@@ -51,6 +51,8 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--bounces", "N|auto", "interreflection: N bounces of light between the mesh's surfaces (0: direct only), or auto:\n"
               "until a pass adds less than the bake's own noise (at most 16) [default 0]", &bounces_);
   args.option("--albedo", "A", "interreflection: the surfaces' diffuse albedo [default 0.8]", &bake.bounce.albedo, 0.0, 1.0);
+  args.flag("--bounce-vertices-only", "interreflection: bounce at the vertices only, not also at the fit's samples before\n"
+            "fitting again", &bounce_vertices_only_);
   args.choice("--bounce-cache", "interreflection: keep each ray's hit between passes (auto: while under 1 GiB)", &bake.bounce.cache,
               {BounceCache::Auto, BounceCache::On, BounceCache::Off}, bounce_cache_name);
   args.choice("--fit", "vertex values: traced at the vertex, averaged from surface samples, or the least-squares fit\n"
@@ -152,6 +154,7 @@ BakeOptions BakeCli::options() const {
       for (int k = l * l; k < (l + 1) * (l + 1); ++k)
         o.order_choice.band_power[static_cast<size_t>(l)] += light.coeffs.row(k).squaredNorm() / 3;  // the channels' mean
   }
+  o.bounce.fit_samples = !bounce_vertices_only_;
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;
   o.source = input;

@@ -42,7 +42,7 @@ struct BakeCli {
   BakeOptions options() const;
 
  private:
-  bool no_control_variate_ = false, no_noise_weighting_ = false;
+  bool no_control_variate_ = false, no_noise_weighting_ = false, bounce_vertices_only_ = false;
   std::string bounces_;  // --bounces N|auto
   std::string order_;    // --order N|auto
   std::vector<std::string> order_lights_;  // --order-light SPEC

@@ -377,6 +377,35 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
 
+// The fit sees bounced light too: each surface sample gathers one bounce from the vertices'
+// transfer before their last pass (so it gets every pass's light, as a vertex does), at the
+// samples' own rays; those values, reduced to face moments, add to the direct moments, and the
+// fit runs again with the vertices' bounced point values as its prior. A face whose bounced light
+// varies inside it (a wall lit by a bright floor nearby) is then fitted as its direct light is,
+// not interpolated from its corners. The moments' variances stay the direct ones'.
+void fit_bounced_samples(const RayScene& scene, const BakeOptions& o, const RowMatrixXd& before_last, const RowMatrixXd& fitted,
+                         const BakeProgress& progress, BakeResult& r) {
+  const SurfaceSamples& s = r.fit_data.samples;
+  BounceOptions b = o.bounce;
+  b.rays = o.sample_rays, b.seed = mix64(o.transfer.seed + 23);
+  if (progress.stage) progress.stage("bounced samples", 0);
+  TransferStats st;
+  const RowMatrixXd g = gather_bounce(r.mesh, scene, before_last, s.points, s.normals, s.offsets, b, &st);
+  r.rays += st.rays, r.bounce.rays += st.rays, r.bounce.sample_rays = st.rays;
+  FaceMoments m = r.fit_data.moments;
+  const Eigen::Index K = g.cols();
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> face(3, K);
+  for (size_t f = 0; f + 1 < s.begin.size(); ++f) {
+    if (s.begin[f] == s.begin[f + 1]) continue;
+    sample_moments(s, s.begin[f], s.begin[f + 1], g.row(static_cast<Eigen::Index>(s.begin[f])).data(), K, face.data());
+    m.rows.middleRows(static_cast<Eigen::Index>(3 * f), 3) += face;
+  }
+  // The prior: the point values with the bounced light the vertices' passes added to the fit.
+  const RowMatrixXd prior = r.point + (r.transfer - fitted);
+  r.transfer = fit_vertex_values(r.mesh, s, m, prior, o.fit, &r.fit, &r.point_variance);
+  if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
+}
+
 // The values as the asset will hold them (AO clamped), for the hold-out error.
 RowMatrixXd asset_values(const BakeOptions& o, const RowMatrixXd& values) {
   RowMatrixXd v = values;
@@ -572,8 +601,13 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
       b.noise_percent = 100 * std::sqrt(num / std::max(den, 1e-300)) / unshadowed_norm(o.transfer.order);
     }
     if (progress.stage) progress.stage("bounces", 0);
-    r.transfer = interreflected_transfer(r.mesh, scene, r.transfer, b, &r.bounce);
+    RowMatrixXd before_last;
+    const RowMatrixXd fitted = r.transfer;
+    r.transfer = interreflected_transfer(r.mesh, scene, fitted, b, &r.bounce, &before_last);
     r.rays += r.bounce.rays;
+    const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);  // else the samples lie on the input
+    if (o.bounce.fit_samples && o.fit.method != FitMethod::Point && r.fit_data.samples.size() > 0 && on_own_samples && r.bounce.passes > 0)
+      fit_bounced_samples(scene, o, before_last, fitted, progress, r);
     r.seconds_bounce = clock.lap();
   }
   if (o.signal == AssetSignal::Ao) {

@@ -67,7 +67,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s << "simplify " << simplify_metric_name(q.metric) << " " << q.geometry_weight << " " << q.min_angle_deg << " " << q.feature_tolerance << " "
     << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << "\n";
   s << "stage " << (o.refine_only ? "refine" : "all") << "\n";
-  s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << "\n";
+  s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << " " << o.bounce.fit_samples << "\n";
   s << "crease " << b.load.crease_angle_deg << "\n";
   s << "gltf " << (b.gltf.up == UpAxis::Z ? "z" : "y") << " " << b.gltf.quantize << " " << b.gltf.compress << "\n";
   return s.str();

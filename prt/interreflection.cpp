@@ -46,16 +46,16 @@ struct Hit {
 
 constexpr uint64_t kBounceSeed = 0xB0B0CE5EEDull;
 
-// Vertex i's R rays, in ray order, as one stream for rtcIntersect1M (they share an origin), and
-// their directions.
-void vertex_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<uint32_t>& generators,
-                 uint32_t R, uint64_t seed, uint32_t i, std::vector<RTCRayHit>& rays, std::vector<Eigen::Vector3d>& dirs) {
-  Eigen::Vector3d n = mesh.normals.row(i).transpose(), t, b;
+// The R rays of a point (normal n, leaving along `away`, lattice shifted by its stream), in ray
+// order, as one stream for rtcIntersect1M (they share an origin), and their directions.
+void point_rays(const RayScene& scene, const Eigen::Vector3d& point, const Eigen::Vector3d& n, const Eigen::Vector3d& away,
+                const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint64_t stream, std::vector<RTCRayHit>& rays,
+                std::vector<Eigen::Vector3d>& dirs) {
+  Eigen::Vector3d t, b;
   tangent_frame(n, t, b);
-  const Eigen::Vector3f local = scene.to_local(mesh.point(i));
-  const Eigen::Vector3d away = offsets.row(i).transpose();
+  const Eigen::Vector3f local = scene.to_local(point);
   const Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
-  Rng rng(mix64(seed ^ kBounceSeed), i);
+  Rng rng(mix64(seed ^ kBounceSeed), stream);
   const double shift[2] = {rng.uniform(), rng.uniform()};
   rays.resize(R), dirs.resize(R);
   for (uint32_t k = 0; k < R; ++k) {
@@ -69,20 +69,21 @@ void vertex_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& of
   }
 }
 
+void vertex_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<uint32_t>& generators,
+                 uint32_t R, uint64_t seed, uint32_t i, std::vector<RTCRayHit>& rays, std::vector<Eigen::Vector3d>& dirs) {
+  point_rays(scene, mesh.point(i), mesh.normals.row(i).transpose(), offsets.row(i).transpose(), generators, R, seed, i, rays, dirs);
+}
+
 void intersect(const RayScene& scene, std::vector<RTCRayHit>& rays) {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   rtcIntersect1M(scene.handle(), &context, rays.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRayHit));
 }
 
-// The R hits of vertex i, in ray order.
-void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<Eigen::Vector3d>& face_normal,
-                  const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
-  thread_local std::vector<RTCRayHit> rays;
-  thread_local std::vector<Eigen::Vector3d> dirs;
-  vertex_rays(mesh, scene, offsets, generators, R, seed, i, rays, dirs);
-  intersect(scene, rays);
-  for (uint32_t k = 0; k < R; ++k) {
+// The hits of the rays, in ray order: a back face is no hit (black).
+void classify(const std::vector<RTCRayHit>& rays, const std::vector<Eigen::Vector3d>& dirs, const std::vector<Eigen::Vector3d>& face_normal,
+              Hit* out) {
+  for (size_t k = 0; k < rays.size(); ++k) {
     const RTCHit& hit = rays[k].hit;
     Hit& h = out[k];
     h.face = -1, h.u = h.v = 0;
@@ -92,18 +93,55 @@ void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& o
   }
 }
 
-}  // namespace
+// The R hits of vertex i, in ray order.
+void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<Eigen::Vector3d>& face_normal,
+                  const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
+  thread_local std::vector<RTCRayHit> rays;
+  thread_local std::vector<Eigen::Vector3d> dirs;
+  vertex_rays(mesh, scene, offsets, generators, R, seed, i, rays, dirs);
+  intersect(scene, rays);
+  classify(rays, dirs, face_normal, out);
+}
 
-RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& o,
-                                    BounceStats* stats) {
+std::vector<Eigen::Vector3d> face_normals(const Mesh& mesh) {
+  std::vector<Eigen::Vector3d> face_normal(mesh.num_faces());
+  for (size_t f = 0; f < mesh.num_faces(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    face_normal[f] = (mesh.point(t[1]) - mesh.point(t[0])).cross(mesh.point(t[2]) - mesh.point(t[0]));
+  }
+  return face_normal;
+}
+
+// (albedo/R) Σ over the hits of `values` interpolated in the hit triangle.
+void gather(const Mesh& mesh, const RowMatrixXd& values, const Hit* hits, uint32_t R, double albedo, Eigen::RowVectorXd& sum) {
+  sum.setZero();
+  for (uint32_t k = 0; k < R; ++k) {
+    const Hit& h = hits[k];
+    if (h.face < 0) continue;
+    const Triangle& t = mesh.triangles[static_cast<size_t>(h.face)];
+    const double w1 = h.u, w2 = h.v, w0 = 1.0 - w1 - w2;
+    sum += w0 * values.row(t[0]) + w1 * values.row(t[1]) + w2 * values.row(t[2]);
+  }
+  sum *= albedo / R;
+}
+
+void check_bounce_options(const BounceOptions& o) {
   if (o.bounces < 0 || o.bounces > 64) throw InputError("bounces must be between 0 and 64, got " + std::to_string(o.bounces));
   if (!(o.albedo >= 0 && o.albedo <= 1)) throw InputError("albedo must be between 0 and 1, got " + std::to_string(o.albedo));
   if (o.rays < 1 || o.rays > (1 << 16)) throw InputError("bounce rays per vertex must be between 1 and 65536, got " + std::to_string(o.rays));
+}
+
+}  // namespace
+
+RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& o,
+                                    BounceStats* stats, RowMatrixXd* before_last) {
+  check_bounce_options(o);
   const size_t V = mesh.num_vertices();
   if (static_cast<size_t>(direct.rows()) != V) throw InputError("interreflection: the direct transfer has the wrong number of rows");
   Stopwatch clock;
   BounceStats s;
   RowMatrixXd total = direct;
+  if (before_last) *before_last = total;
   if (o.bounces == 0 || V == 0) {
     if (stats) *stats = s;
     return total;
@@ -111,11 +149,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
   const auto R = static_cast<uint32_t>(o.rays);
   const std::vector<uint32_t> generators = doubling_generators(R, 0);
   const RowMatrixX3d offsets = vertex_offset_directions(mesh);
-  std::vector<Eigen::Vector3d> face_normal(mesh.num_faces());
-  for (size_t f = 0; f < mesh.num_faces(); ++f) {
-    const Triangle& t = mesh.triangles[f];
-    face_normal[f] = (mesh.point(t[1]) - mesh.point(t[0])).cross(mesh.point(t[2]) - mesh.point(t[0]));
-  }
+  const std::vector<Eigen::Vector3d> face_normal = face_normals(mesh);
   const double cache_mib = double(V) * R * sizeof(Hit) / (1024.0 * 1024.0);
   s.cached = o.cache == BounceCache::On || (o.cache == BounceCache::Auto && cache_mib <= o.cache_limit_mib);
   s.cache_mib = s.cached ? cache_mib : 0;
@@ -143,18 +177,12 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
       for (size_t i = range.begin(); i != range.end(); ++i) {
         const Hit* hits = s.cached ? &cache[i * R] : own.data();
         if (!s.cached) trace_vertex(mesh, scene, offsets, face_normal, generators, R, o.seed, static_cast<uint32_t>(i), own.data());
-        sum.setZero();
-        for (uint32_t k = 0; k < R; ++k) {
-          const Hit& h = hits[k];
-          if (h.face < 0) continue;
-          const Triangle& t = mesh.triangles[static_cast<size_t>(h.face)];
-          const double w1 = h.u, w2 = h.v, w0 = 1.0 - w1 - w2;
-          sum += w0 * previous.row(t[0]) + w1 * previous.row(t[1]) + w2 * previous.row(t[2]);
-        }
-        next.row(static_cast<Eigen::Index>(i)) = (o.albedo / R) * sum;
+        gather(mesh, previous, hits, R, o.albedo, sum);
+        next.row(static_cast<Eigen::Index>(i)) = sum;
       }
     });
     if (!s.cached) scene.check("tracing bounce rays"), s.rays += uint64_t(V) * R;
+    if (before_last) *before_last = total;
     total += next;
     double change2 = 0;
     for (size_t i = 0; i < V; ++i) change2 += area[i] * next.row(static_cast<Eigen::Index>(i)).squaredNorm();
@@ -169,8 +197,37 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
   return total;
 }
 
+RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& values, const RowMatrixX3d& points,
+                          const RowMatrixX3d& normals, const RowMatrixX3d& offsets, const BounceOptions& o, TransferStats* stats) {
+  check_bounce_options(o);
+  if (static_cast<size_t>(values.rows()) != mesh.num_vertices()) throw InputError("gather: the values have the wrong number of rows");
+  if (points.rows() != normals.rows() || points.rows() != offsets.rows()) throw InputError("gather: points, normals and offsets differ in count");
+  const Stopwatch clock;
+  const auto R = static_cast<uint32_t>(o.rays);
+  const std::vector<uint32_t> generators = doubling_generators(R, 0);
+  const std::vector<Eigen::Vector3d> face_normal = face_normals(mesh);
+  RowMatrixXd out(points.rows(), values.cols());
+  parallel_range<Eigen::Index>(points.rows(), o.threads, 16, [&](const tbb::blocked_range<Eigen::Index>& range) {
+    thread_local std::vector<RTCRayHit> rays;
+    thread_local std::vector<Eigen::Vector3d> dirs;
+    std::vector<Hit> hits(R);
+    Eigen::RowVectorXd sum(values.cols());
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+      point_rays(scene, points.row(i).transpose(), normals.row(i).transpose(), offsets.row(i).transpose(), generators, R, o.seed,
+                 static_cast<uint64_t>(i), rays, dirs);
+      intersect(scene, rays);
+      classify(rays, dirs, face_normal, hits.data());
+      gather(mesh, values, hits.data(), R, o.albedo, sum);
+      out.row(i) = sum;
+    }
+  });
+  scene.check("gathering a bounce");
+  if (stats) stats->rays = uint64_t(points.rows()) * R, stats->seconds = clock.total();
+  return out;
+}
+
 uint64_t bare_bounce_loop(const Mesh& mesh, const RayScene& scene, const BounceOptions& o, TransferStats* stats) {
-  if (o.rays < 1 || o.rays > (1 << 16)) throw InputError("bounce rays per vertex must be between 1 and 65536, got " + std::to_string(o.rays));
+  check_bounce_options(o);
   const auto R = static_cast<uint32_t>(o.rays);
   const std::vector<uint32_t> generators = doubling_generators(R, 0);
   const RowMatrixX3d offsets = vertex_offset_directions(mesh);

@@ -30,12 +30,17 @@ struct BounceOptions {
   //! them while they fit in `cache_limit_mib`. The results are the same either way.
   BounceCache cache = BounceCache::Auto;
   double cache_limit_mib = 1024;
+  //! After the vertices' passes, bounce once more at the fit's surface samples and fit again, so
+  //! the fit sees bounced light too (bake; a fit to samples of the input after simplification
+  //! keeps the vertices' passes only)
+  bool fit_samples = true;
 };
 
 struct BounceStats {
   int passes = 0;
   std::vector<double> change_percent;  //!< per pass: RMS over the surface of what it added
-  uint64_t rays = 0;                   //!< traced (once with the cache, every pass without)
+  uint64_t rays = 0;                   //!< traced (once with the cache, every pass without; and at the samples)
+  uint64_t sample_rays = 0;            //!< bake: the fit's samples' bounce (BounceOptions::fit_samples)
   bool cached = false;
   double cache_mib = 0;
   double seconds = 0;
@@ -51,8 +56,22 @@ struct BounceStats {
 //! The result does not depend on the thread count or on the cache.
 //! \param direct #V by N², the vertices' direct transfer (the asset's values)
 //! \throw InputError for options out of range, EmbreeError
+//! \param before_last if given, receives the transfer before the last pass (the direct transfer
+//!        plus passes 1..N−1): what the last pass bounced, which gather_bounce bounces once more
+//!        at other points
 RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& options,
-                                    BounceStats* stats = nullptr);
+                                    BounceStats* stats = nullptr, RowMatrixXd* before_last = nullptr);
+
+//! One bounce gathered at surface points that need not be vertices (the fit's samples): at each,
+//! (albedo/R) Σ over R cosine-weighted rays of `values` interpolated in the front face each hits,
+//! as a pass of interreflected_transfer does at a vertex (point i's rays are its own stream of
+//! options.seed). The same for any thread count.
+//! \param values #V by K on `mesh`'s render vertices, whose triangles `scene` holds in order
+//! \param offsets #P by 3 unit directions the rays leave along (the samples' own)
+//! \throw InputError for options out of range, EmbreeError
+RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& values, const RowMatrixX3d& points,
+                          const RowMatrixX3d& normals, const RowMatrixX3d& offsets, const BounceOptions& options,
+                          TransferStats* stats = nullptr);
 
 //! The baseline for benchmarks: one pass's rays (the same directions from the same vertices, with
 //! the same threads) through Embree's closest-hit query, with nothing done but counting hits.

@@ -31,6 +31,7 @@ TEST(Batch, TheKeyChangesWithEveryOptionThatChangesTheAssetAndNotWithThreads) {
   const std::vector<std::pair<const char*, std::function<void(BatchOptions&)>>> changes = {
       {"order", [](BatchOptions& o) { o.bake.transfer.order = 3; }},
       {"order_auto", [](BatchOptions& o) { o.bake.order_auto = true; }},
+      {"bounce_fit_samples", [](BatchOptions& o) { o.bake.bounce.bounces = 1, o.bake.bounce.fit_samples = false; }},
       {"max_order", [](BatchOptions& o) { o.bake.order_choice.max_order = 6; }},
       {"order_tolerance", [](BatchOptions& o) { o.bake.order_choice.tolerance_percent = 2; }},
       {"order_light", [](BatchOptions& o) { o.bake.order_choice.band_power = {1, 0.5}; }},

@@ -108,5 +108,44 @@ TEST(Interreflection, IsTheSameForAnyThreadCountWithOrWithoutTheCache) {
   EXPECT_THROW(bake(mesh, o), InputError);
 }
 
+TEST(Interreflection, AGatherAtTheVerticesIsTheirPassAndBeforeLastIsOnePassLess) {
+  const Mesh mesh = test::build(test::merge(test::icosphere(1), test::quad(2.5, -1.0, true)));
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  TransferOptions t;
+  t.order = 3, t.rays = 64;
+  const RowMatrixX3d offsets = vertex_offset_directions(mesh), points = vertex_positions(mesh);
+  const RowMatrixXd direct = shadowed_transfer(scene, points, mesh.normals, t, nullptr, {}, &offsets);
+  BounceOptions b;
+  b.rays = 64, b.bounces = 1;
+  // The same rays (each vertex's stream of the same seed) from the same points: the same sums.
+  const RowMatrixXd pass = interreflected_transfer(mesh, scene, direct, b) - direct;
+  EXPECT_GT(pass.col(0).maxCoeff(), 0.01);
+  EXPECT_LT((gather_bounce(mesh, scene, direct, points, mesh.normals, offsets, b) - pass).cwiseAbs().maxCoeff(), 1e-15);
+  RowMatrixXd before_last;
+  b.bounces = 3;
+  interreflected_transfer(mesh, scene, direct, b, nullptr, &before_last);
+  b.bounces = 2;
+  EXPECT_EQ((before_last - interreflected_transfer(mesh, scene, direct, b)).cwiseAbs().maxCoeff(), 0.0);
+  RowMatrixX3d two(2, 3);
+  two.setZero();
+  EXPECT_THROW(gather_bounce(mesh, scene, direct, points, mesh.normals, two, b), InputError);
+}
+
+TEST(Interreflection, TheFitSeesBouncedLightUnlessAskedNotTo) {
+  // The fit's samples gather one bounce and the fit runs again (its effect on error is measured
+  // on real scenes: scenes_test.cpp, ScenesBounceFit); here, that it runs, and only when asked.
+  const Mesh mesh = test::build(test::merge(test::icosphere(2), test::quad(3.0, -1.05, true)));
+  BakeOptions o;
+  o.transfer.rays = 32, o.transfer.order = 2, o.bounce.bounces = 2;
+  const BakeResult samples = bake(mesh, o);
+  o.bounce.fit_samples = false;
+  const BakeResult vertices = bake(mesh, o);
+  EXPECT_EQ(samples.bounce.sample_rays, 16 * samples.fit_data.samples.size());
+  EXPECT_EQ(vertices.bounce.sample_rays, 0u);
+  EXPECT_GT((samples.transfer - vertices.transfer).cwiseAbs().maxCoeff(), 1e-3);
+  o.fit.method = FitMethod::Point, o.bounce.fit_samples = true;
+  EXPECT_EQ(bake(mesh, o).bounce.sample_rays, 0u) << "no samples, nothing to gather at";
+}
+
 }  // namespace
 }  // namespace prtsub
