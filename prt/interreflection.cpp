@@ -12,6 +12,10 @@
 // are the same in every pass, which is what lets the hits be kept: a hit is the face and its two
 // barycentrics, 12 bytes, so R = 256 rays cost 3 KiB a vertex. Without the cache every pass
 // traces the same rays again and finds the same hits.
+//
+// gather_bounce is one such pass at points that are not vertices (the bake's fit samples): the
+// same rays, the same rule at the hit, so at a vertex's own position and stream it is that
+// vertex's pass exactly.
 #include "prtsub/prt/interreflection.h"
 
 #include <atomic>
