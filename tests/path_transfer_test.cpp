@@ -49,23 +49,23 @@ void centroids(const Mesh& m, double below, RowMatrixX3d& points, RowMatrixX3d& 
 double radiance(double albedo, double t0) { return albedo / M_PI * std::sqrt(4 * M_PI) * t0; }
 
 TEST(PathTransfer, TheBowlsRadianceFollowsItsClosedFormBounceByBounce) {
-  const Scene s(test::bowl(4));
+  const Scene s(test::bowl(3));
   RowMatrixX3d points, normals;
   centroids(s.mesh, -0.5, points, normals);
   ASSERT_GT(points.rows(), 100);
   const double n = static_cast<double>(points.rows());
   TransferOptions t;
-  t.order = 1, t.rays = 4096;
+  t.order = 1, t.rays = 2048;
   const RowMatrixXd direct = shadowed_transfer(s.rays, points, normals, t);
   // The open fraction q of each point's cosine-weighted rays: 1/2 on the sphere, a little less on
-  // its 2560-face approximation; every bounce then keeps the 1 − q that hit the inside.
+  // its 640-face approximation; every bounce then keeps the 1 − q that hit the inside.
   double q = 0;
   for (Eigen::Index i = 0; i < points.rows(); ++i) q += direct(i, 0) / (std::sqrt(M_PI) / 2) / n;
-  EXPECT_NEAR(q, 0.5, 0.01);
+  EXPECT_NEAR(q, 0.5, 0.02);  // 0.488 measured
   for (const double albedo : {0.5, 1.0}) {
     for (const int bounces : {1, 3}) {
       PathOptions p;
-      p.order = 1, p.paths = 1024, p.bounces = bounces, p.albedo = albedo;
+      p.order = 1, p.paths = 512, p.bounces = bounces, p.albedo = albedo;
       std::vector<double> var;
       const RowMatrixXd bounced = path_traced_transfer(s.rays, s.surface(), points, normals, p, &var);
       double want = 0;
@@ -114,7 +114,7 @@ TEST(PathTransfer, BothEstimatorsAgreeWithinTheirNoise) {
   // A sphere resting over a ground: contact shadows and light bouncing between the two.
   const Scene s(test::merge(test::icosphere(2), test::quad(3.0, -1.02, true)));
   ReferenceOptions ro;
-  ro.points = 200, ro.rays = 2, ro.noise_points = 0;
+  ro.points = 150, ro.rays = 2, ro.noise_points = 0;
   const Reference at = make_reference(s.mesh, s.rays, ro);
   TransferOptions t;
   t.order = 3, t.rays = 1024;
@@ -123,7 +123,7 @@ TEST(PathTransfer, BothEstimatorsAgreeWithinTheirNoise) {
   PathOptions p;
   p.order = 3, p.paths = 2048, p.bounces = 2, p.albedo = 0.9, p.seed = 1;
   split += path_traced_transfer(s.rays, s.surface(), at.points, at.normals, p, &var_split);
-  p.paths = 1 << 14, p.plain = true, p.seed = 2;
+  p.paths = 1 << 12, p.plain = true, p.seed = 2;
   const RowMatrixXd plain = path_traced_transfer(s.rays, s.surface(), at.points, at.normals, p, &var_plain);
   double diff2 = 0, var = 0;
   for (Eigen::Index i = 0; i < at.points.rows(); ++i) {
@@ -131,7 +131,7 @@ TEST(PathTransfer, BothEstimatorsAgreeWithinTheirNoise) {
     diff2 += (split.row(i) - plain.row(i)).squaredNorm();
     var += var_direct[k] + var_split[k] + var_plain[k];
   }
-  // 200 points × 9 coefficients: the ratio of a sum of squares to its expectation spreads by a
+  // 150 points × 9 coefficients: the ratio of a sum of squares to its expectation spreads by a
   // few percent; a bias the size of the noise would double it.
   EXPECT_GT(diff2 / var, 0.75);
   EXPECT_LT(diff2 / var, 1.3);
