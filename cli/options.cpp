@@ -36,6 +36,12 @@ void BakeCli::add_common(ArgParser& args) {
   args.option("--order-light", "SPEC", "--order auto: errors under this light turned any way (the --light syntax of render;\n"
               "lights add up) instead of the worst light, eval's metric", &order_lights_);
   add_transfer_options(args, bake.transfer, false);
+  args.option("--first-rays", "R", "per-vertex early stop: each vertex traces R rays (even), then doubles them while a\n"
+              "doubling is worth its rays, up to --rays", &bake.round_rays, 2, 1 << 20);
+  args.option("--ray-noise", "P", "early stop: the price of a doubling, as the noise (percent of ||t_unshadowed||) at which\n"
+              "a vertex of mean area stops at --rays", &bake.stop_noise_percent, 0.0, 100.0);
+  args.option("--rays-fixed", "R", "every vertex traces exactly R rays, no early stop (--rays and --first-rays are ignored)",
+              &rays_fixed_, 1, 1 << 20);
   add_report_option(args, report);
 }
 
@@ -154,6 +160,8 @@ BakeOptions BakeCli::options() const {
       for (int k = l * l; k < (l + 1) * (l + 1); ++k)
         o.order_choice.band_power[static_cast<size_t>(l)] += light.coeffs.row(k).squaredNorm() / 3;  // the channels' mean
   }
+  if (rays_fixed_ > 0) o.transfer.rays = rays_fixed_, o.round_rays = 0;
+  if (o.round_rays % 2 != 0) throw UsageError("--first-rays: expected an even count, got " + std::to_string(o.round_rays));
   o.bounce.fit_samples = !bounce_vertices_only_;
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;

@@ -43,6 +43,7 @@ struct BakeCli {
 
  private:
   bool no_control_variate_ = false, no_noise_weighting_ = false, bounce_vertices_only_ = false;
+  int rays_fixed_ = 0;  // --rays-fixed R: no early stop
   std::string bounces_;  // --bounces N|auto
   std::string order_;    // --order N|auto
   std::vector<std::string> order_lights_;  // --order-light SPEC

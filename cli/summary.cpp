@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "prtsub/prt/sh.h"
 
@@ -51,6 +52,14 @@ void record_ray_spread(Report& r, const std::vector<double>& rays, int first_rou
   }
   const char* names[5] = {"1x", "2x", "4x", "8x", "16x_up"};
   for (size_t b = 0; b < 5; ++b) r.set(std::string("vertices_with_rays_") + names[b], bins[b]);
+  // The whole distribution: each count that occurs, and its vertices.
+  std::map<double, size_t> counts;
+  double sum = 0;
+  for (double n : rays) ++counts[n], sum += n;
+  std::string table;
+  for (const auto& [n, k] : counts) table += (table.empty() ? "" : ", ") + std::to_string(static_cast<uint64_t>(n)) + ": " + std::to_string(k);
+  r.set("vertex_rays_distribution", table);
+  r.set("vertex_rays_mean", rays.empty() ? 0.0 : sum / double(rays.size()));
 }
 
 void record_sample_spread(Report& r, const FitData& data) {
@@ -203,7 +212,18 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
   if (res.simplified && res.simplify.collapses > 0 && (o.refine != Refinement::Auto || res.refine.splits == 0)) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
-  record_ray_spread(r, res.vertex_rays, o.transfer.rays);
+  const bool early = o.round_rays > 0 && o.transfer.rays > o.round_rays;
+  record_ray_spread(r, res.vertex_rays, early ? o.round_rays : o.transfer.rays);
+  r.set("early_stop", early);
+  if (early) {
+    r.set("early_stop_first_rays", o.round_rays);
+    r.set("early_stop_noise_percent", o.stop_noise_percent);
+    r.set("early_stop_rounds", res.early_stop.rounds);
+    r.set("early_stop_rays", res.early_stop.rays);
+    size_t at_first = 0;
+    if (!res.early_stop.histogram.empty()) at_first = res.early_stop.histogram[0];
+    r.set("early_stop_at_first_round", at_first);
+  }
   if (o.target_error > 0) {
     r.set("target_error_percent", o.target_error);
     r.set("target_rays", res.target_rays);
@@ -269,6 +289,11 @@ void print_bake_summary(const Report& r) {
                      "clamped into [0, 1]"});
   else
     r.print(stdout, {"  transfer:   order {order} ({coefficients} coefficients), {rays_per_vertex} rays per vertex, seed {seed}"});
+  if (r.format("{early_stop}") == "yes")
+    r.print(stdout, {"  early stop: from {early_stop_first_rays} rays, {early_stop_rounds} doubling rounds to at most {rays_per_vertex} "
+                     "(noise {early_stop_noise_percent}%); {early_stop_at_first_round} vertices stopped after the first; mean "
+                     "{vertex_rays_mean:1} rays per vertex",
+                     "              vertices by rays: {vertex_rays_distribution}"});
   if (r.format("{order_auto}") == "yes")
     r.print(stdout, {"  order auto: {order}: what it leaves out, {order_truncation_percent:3}% of ||t_unshadowed||, is {order_why} "
                      "({order_tolerance_percent:3}%); pilot of {order_pilot_points} vertices, {seconds_order:3} s",

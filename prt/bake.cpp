@@ -50,6 +50,10 @@ const char* refinement_name(Refinement r) {
 
 void check_bake_options(const BakeOptions& o) {
   check_transfer_options(o.transfer);
+  if (o.round_rays != 0 && (o.round_rays < 2 || o.round_rays % 2 != 0 || o.round_rays > (1 << 20)))
+    throw InputError("an early stop's first round must be an even count of rays from 2, got " + std::to_string(o.round_rays));
+  if (!(o.stop_noise_percent >= 0) || !std::isfinite(o.stop_noise_percent))
+    throw InputError("an early stop's noise must be a finite, non-negative percentage, got " + std::to_string(o.stop_noise_percent));
   if (o.bounce.bounces < 0 || o.bounce.bounces > 64) throw InputError("bounces must be between 0 and 64, got " + std::to_string(o.bounce.bounces));
   if (!(o.bounce.albedo >= 0 && o.bounce.albedo <= 1)) throw InputError("albedo must be between 0 and 1, got " + std::to_string(o.bounce.albedo));
   if (o.bounce.bounces > 0 && o.signal == AssetSignal::Ao)
@@ -139,10 +143,25 @@ BakeOptions resolve_bake_options(const BakeOptions& in) {
 
 namespace {
 
+bool early_stop(const BakeOptions& o) { return o.round_rays > 0 && o.transfer.rays > o.round_rays; }
+
+// The vertices' first round: what later rounds at a vertex continue.
+TransferOptions first_round(const BakeOptions& o) {
+  TransferOptions t = o.transfer;
+  if (early_stop(o)) t.rays = o.round_rays;
+  return t;
+}
+
 Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   Metadata m = o.signal == AssetSignal::Ao ? ao_metadata() : sh_convention_metadata(o.transfer.order);
   m.push_back({"source", o.source.empty() ? "(in memory)" : o.source});
   m.push_back({"rays", std::to_string(o.transfer.rays)});
+  if (early_stop(o)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "each vertex from %d rays, doubling to at most %d until its noise is at most %g%% of ||t_unshadowed||",
+                  o.round_rays, o.transfer.rays, o.stop_noise_percent);
+    m.push_back({"early_stop", buf});
+  }
   m.push_back({"seed", std::to_string(o.transfer.seed)});
   m.push_back({"threads", std::to_string(o.transfer.threads) + " (results do not depend on it)"});
   m.push_back({"crease_angle", std::to_string(r.mesh.crease_angle_deg)});
@@ -227,7 +246,9 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
   r.refine = refine_adaptive(r.mesh, r.transfer, signal, o.adaptive);
   r.rays += signal.rays();
   r.point_variance.resize(r.mesh.num_vertices(), 0.0);
-  for (size_t i = before; i < r.mesh.num_vertices() && i < signal.variance().size(); ++i) r.point_variance[i] = signal.variance()[i];
+  r.vertex_rays.resize(r.mesh.num_vertices(), 0.0);
+  for (size_t i = before; i < r.mesh.num_vertices() && i < signal.variance().size(); ++i)
+    r.point_variance[i] = signal.variance()[i], r.vertex_rays[i] = o.transfer.rays;
   if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
 }
 
@@ -240,10 +261,11 @@ void simplify_adaptively(const BakeOptions& o, BakeResult& r, const ProgressFn& 
   std::vector<uint32_t> to;
   r.simplified = true;
   r.simplify = simplify(r.mesh, r.transfer, so, &to, progress);
-  std::vector<double> variance(r.mesh.num_vertices(), 0.0);
+  std::vector<double> variance(r.mesh.num_vertices(), 0.0), rays(r.mesh.num_vertices(), 0.0);
   for (size_t i = 0; i < to.size() && i < r.point_variance.size(); ++i)
-    if (to[i] != UINT32_MAX) variance[to[i]] = r.point_variance[i];
+    if (to[i] != UINT32_MAX) variance[to[i]] = r.point_variance[i], rays[to[i]] = r.vertex_rays[i];
   r.point_variance = std::move(variance);
+  r.vertex_rays = std::move(rays);
   if (!r.simplify.warning.empty()) r.warnings.push_back(r.simplify.warning);
 }
 
@@ -366,7 +388,7 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
         plan_top_up(smoothed_variance(r.mesh, r.point_variance, r.vertex_rays), r.vertex_rays, static_cast<uint64_t>(o.vertex_share * saved), vertex_areas(r.mesh),
                     16.0 * o.transfer.rays);
     if (progress.stage) progress.stage("vertex rays", plan.vertices);
-    r.top_up = apply_top_up(r.mesh, scene, o.transfer, plan, r.transfer, r.point_variance, r.vertex_rays, progress.add);
+    r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.transfer, r.point_variance, r.vertex_rays, progress.add);
     r.rays += r.top_up.rays;
     r.seconds_top_up = clock.lap();
   }
@@ -484,7 +506,7 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
     const TopUpPlan plan = plan_top_up_to_variance(planning, r.vertex_rays, want, r.point_variance, w, max_rays);
     if (plan.rays == 0) break;
     if (progress.stage) progress.stage("error target", plan.vertices);  // each vertex's lattice continued
-    const TopUpStats st = apply_top_up(r.mesh, scene, o.transfer, plan, r.point, r.point_variance, r.vertex_rays, progress.add);
+    const TopUpStats st = apply_top_up(r.mesh, scene, first_round(o), plan, r.point, r.point_variance, r.vertex_rays, progress.add);
     r.rays += st.rays, r.target_rays += st.rays, ++r.target_rounds;
     r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
     r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
@@ -559,9 +581,18 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     clock.lap();
   }
   if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
-  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, o.transfer, &stats, progress.add, &offsets,
-                                 &r.point_variance);
+  const TransferOptions first = first_round(o);
+  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, first, &stats, progress.add, &offsets, &r.point_variance);
   r.rays += stats.rays;
+  r.vertex_rays.assign(r.mesh.num_vertices(), first.rays);
+  if (early_stop(o)) {  // the order is known: so is the variance to stop at
+    const double stop = std::pow(o.stop_noise_percent / 100 * unshadowed_norm(o.transfer.order), 2);
+    if (progress.stage) progress.stage("early stop", 0);
+    std::function<void()> barrier;
+    if (o.transfer.log) barrier = [&] { o.transfer.log->barrier(false); };
+    r.early_stop = early_stop_vertices(r.mesh, scene, first, o.transfer.rays, stop, r.transfer, r.point_variance, r.vertex_rays, barrier, progress.add);
+    r.rays += r.early_stop.rays;
+  }
   r.seconds_transfer = clock.lap();
   if (o.refine == Refinement::Adaptive) {
     if (o.adaptive.budget < r.mesh.num_faces()) {
@@ -576,7 +607,6 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     refine_both_ways(mesh, scene, o, progress, r);
     r.seconds_refine = clock.lap();
   }
-  r.vertex_rays.assign(r.mesh.num_vertices(), o.transfer.rays);
   if (o.transfer.log && o.fit.method == FitMethod::Point) o.transfer.log->barrier(true);
   if (o.refine_only) {  // --stage refine: the mesh and its point values, for later bakes
     r.point = r.transfer;

@@ -48,6 +48,13 @@ struct BakeOptions {
   //! Order, rays, seed and threads of the vertices' transfer. AO bakes force order 1; the
   //! samples' seed and the fit's threads derive from these.
   TransferOptions transfer;
+  //! Per-vertex early stop (early_stop_vertices), off when 0: every input vertex first traces this
+  //! many rays, then doubles them round by round up to transfer.rays while its estimated noise
+  //! (the square root of its variance), or its faces', is above stop_noise_percent of
+  //! ||t_unshadowed||, eval's unit. At transfer.rays ≤ round_rays every vertex traces
+  //! transfer.rays. Refinement's new vertices and the fit's samples trace fixed counts.
+  int round_rays = 0;
+  double stop_noise_percent = 0.5;
   //! --order auto: transfer.order is chosen from a pilot of the vertices before anything else is
   //! traced (order_choice.h); transfer.order is then ignored. Transfer assets only.
   bool order_auto = false;
@@ -120,6 +127,7 @@ struct BakeResult {
   SimplifyStats simplify;      //!< simplification's counts and times
   FitData fit_data;      //!< the samples (empty when fit is point)
   TopUpStats top_up;     //!< the second round of vertex rays (Pilot allocation)
+  EarlyStopStats early_stop;  //!< the vertices' later rounds (round_rays)
   //! Pilot allocation: the asset's error measured on the pilot's held-out samples (what eval
   //! would report; all 0 otherwise)
   ErrorEstimate predicted;

@@ -173,7 +173,13 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
   std::map<std::pair<int, double>, std::vector<size_t>> buckets;  // (doublings, rays so far) → vertices
   for (size_t i = 0; i < V; ++i)
     if (plan.level[i] >= 0) buckets[{plan.level[i], rays[i]}].push_back(i);
-  const bool continued = options.rays >= 2 && options.rays % 2 == 0;
+  // Each vertex's lattice is continued from its first round's, when it holds first_round·2^j.
+  const int first_round = options.rays;
+  auto continues = [&](double r1) {
+    if (first_round < 2 || first_round % 2 != 0) return false;
+    const double doublings = std::log2(r1 / first_round);
+    return doublings >= 0 && doublings == std::round(doublings);
+  };
   for (const auto& [key, members] : buckets) {
     const auto n = static_cast<Eigen::Index>(members.size());
     RowMatrixX3d p(n, 3), nrm(n, 3), off(n, 3);
@@ -188,8 +194,8 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
     TransferOptions o = options;
     o.rays = static_cast<int>(r2);
     o.streams = &streams;
-    if (continued) {
-      o.first_ray = static_cast<uint32_t>(r1), o.first_round_rays = options.rays;
+    if (continues(r1)) {
+      o.first_ray = static_cast<uint32_t>(r1), o.first_round_rays = first_round;
     } else {
       o.seed = mix64(options.seed ^ (0x7095ull + static_cast<uint64_t>(r1)));  // an independent lattice per round
     }
@@ -242,6 +248,55 @@ std::vector<double> vertex_areas(const Mesh& mesh) {
       for (int c = 0; c < 3; ++c) a[t[c]] += area / 3;
   }
   return a;
+}
+
+int early_stop_rounds(int first_rays, int max_rays) {
+  int k = 0;
+  while (first_rays > 0 && (int64_t(first_rays) << (k + 1)) <= max_rays) ++k;
+  return k;
+}
+
+EarlyStopStats early_stop_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& first, int max_rays, double stop_variance,
+                                   RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
+                                   const std::function<void()>& between_rounds, const ProgressFn& progress) {
+  const size_t V = mesh.num_vertices();
+  if (variance.size() != V || rays.size() != V || static_cast<size_t>(values.rows()) != V)
+    throw InputError("early stop: values, variances and ray counts need one row per vertex");
+  if (!(stop_variance >= 0) || !std::isfinite(stop_variance)) throw InputError("early stop: the variance to stop at must be finite and 0 or more");
+  const Stopwatch clock;
+  EarlyStopStats stats;
+  const std::vector<double> area = vertex_areas(mesh);
+  double mean_area = 0;
+  for (double a : area) mean_area += a / double(std::max<size_t>(V, 1));
+  // At most as many rounds as doublings fit (a vertex can be doubled in a later round than its
+  // neighbours, when their rays changed the variance around it, but never past max_rays).
+  const int most_rounds = early_stop_rounds(first.rays, max_rays);
+  for (int k = 0; k < most_rounds; ++k) {
+    const std::vector<double> around = smoothed_variance(mesh, variance, rays);
+    TopUpPlan plan;
+    plan.level.assign(V, -1);
+    for (size_t i = 0; i < V; ++i) {
+      // The faces around guard against a lucky estimate (one vertex's is a chi-square of few
+      // degrees of freedom). Trusting a vertex still exact after a doubling instead doubled the
+      // error of the test's ground (it missed the plate low on its horizon): it doubles on.
+      const double v = std::max(variance[i], around[i]);
+      if (2 * rays[i] <= max_rays && v * area[i] / std::max(mean_area, 1e-300) > stop_variance * rays[i] / max_rays) plan.level[i] = 1, ++plan.vertices, plan.rays += uint64_t(rays[i]);
+    }
+    if (plan.vertices == 0) break;
+    if (between_rounds) between_rounds();
+    stats.rays += apply_top_up(mesh, scene, first, plan, values, variance, rays, progress).rays;
+    ++stats.rounds;
+  }
+  // A sharded bake counts its phases before it traces: every round that could have run ends one.
+  if (between_rounds)
+    for (int k = static_cast<int>(stats.rounds); k < most_rounds; ++k) between_rounds();
+  for (size_t i = 0; i < V; ++i) {
+    const auto j = static_cast<size_t>(std::max(0.0, std::round(std::log2(rays[i] / std::max(first.rays, 1)))));
+    if (stats.histogram.size() <= j) stats.histogram.resize(j + 1, 0);
+    ++stats.histogram[j];
+  }
+  stats.seconds = clock.total();
+  return stats;
 }
 
 TopUpStats top_up_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, int rays_done,

@@ -2,6 +2,7 @@
 // spends a ray budget where it lowers the summed variance most.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "prtsub/prt/transfer.h"
@@ -59,6 +60,35 @@ std::vector<double> vertex_areas(const Mesh& mesh);
 TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, const TopUpPlan& plan,
                         RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
                         const ProgressFn& progress = {});
+
+struct EarlyStopStats {
+  size_t rounds = 0;  //!< after the first
+  uint64_t rays = 0;  //!< the later rounds'
+  double seconds = 0;
+  //! [j]: vertices that stopped at the first round's count times 2^j
+  std::vector<size_t> histogram;
+};
+
+//! How many doubling rounds fit between a first round of first_rays and max_rays.
+int early_stop_rounds(int first_rays, int max_rays);
+
+//! Per-vertex early stop, after a first round of `first.rays` rays at every render vertex of
+//! `mesh` (values, variance and rays hold it). Round by round, a vertex doubles its rays
+//! (continuing its lattice, within `max_rays`) while v·w/w̄ > stop_variance·R/max_rays: v its
+//! variance after R rays, the larger of its own estimate and the faces' around it
+//! (smoothed_variance), w/w̄ its area against the mean. That stops each vertex where the
+//! variance a doubling removes (v/2) is worth less than the rays it costs (R), at one price for
+//! the whole surface: Neyman's allocation, R ∝ σ√w, reached by stopping instead of planning. A
+//! vertex of mean area stops at max_rays with variance stop_variance, with less where it gets
+//! there earlier. A vertex whose first round is exact, fully open or fully enclosed (variance 0),
+//! stops there unless a face around it saw otherwise. Ends when no vertex doubles, or after
+//! early_stop_rounds(first.rays, max_rays) rounds.
+//! `between_rounds`, if set, runs once per round that could run (early_stop_rounds), before it
+//! or at the end (a sharded bake's barrier: its phases are counted before it traces). Does not
+//! depend on threads.
+EarlyStopStats early_stop_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& first, int max_rays, double stop_variance,
+                                   RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
+                                   const std::function<void()>& between_rounds = {}, const ProgressFn& progress = {});
 
 //! Traces up to `budget` more rays from the render vertices of `mesh` and merges them into
 //! `values` (#V by K) and `variance` (#V, as shadowed_transfer estimates it), each vertex

@@ -110,6 +110,8 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     } else if (key == "max_order") o.order_choice.max_order = value.cast<int>();
     else if (key == "order_tolerance") o.order_choice.tolerance_percent = value.cast<double>();
     else if (key == "rays") o.transfer.rays = value.cast<int>();
+    else if (key == "first_rays") o.round_rays = value.cast<int>();
+    else if (key == "ray_noise") o.stop_noise_percent = value.cast<double>();
     else if (key == "seed") o.transfer.seed = value.cast<uint64_t>();
     else if (key == "threads") o.transfer.threads = value.cast<int>();
     else if (key == "signal") o.signal = parse_asset_signal(value.cast<std::string>());
@@ -131,7 +133,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, max_order, order_tolerance, rays, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
+                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");

@@ -211,6 +211,52 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
   }
 }
 
+TEST(Bake, EarlyStopDoublesWhereTheSphereMeetsThePlaneAndStopsOnTheOpenTop) {
+  // A sphere on a plane, up to 512 rays from 32: the sphere's top sees the whole sky, exact after
+  // the first round. Its pole stops there; the rest of the top doubles only while a face around
+  // it sees the plane (the guard against a lucky first round), and stays exact. The plane's
+  // vertices, which see the sphere, double. Every count is 32·2^j, the bake's rays are their sum
+  // (point fit: no samples, no top-up), the metadata says how it was traced, and the result does
+  // not depend on threads.
+  const Mesh mesh = test::build(test::merge(test::icosphere(2), test::quad(2.5, -1.0, true)));
+  BakeOptions o;
+  o.fit.method = FitMethod::Point;
+  o.transfer.rays = 512, o.round_rays = 32, o.transfer.threads = 1;
+  const BakeResult one = bake(mesh, o);
+  ASSERT_EQ(one.vertex_rays.size(), mesh.num_vertices());
+  double sum = 0;
+  size_t upper = 0, at_first = 0, plane_doubled = 0;
+  for (uint32_t i = 0; i < mesh.num_vertices(); ++i) {
+    const double R = one.vertex_rays[i], j = std::log2(R / 32);
+    EXPECT_EQ(j, std::round(j)) << i;
+    EXPECT_LE(R, 512.0);
+    sum += R;
+    const Eigen::Vector3d p = mesh.point(i);
+    if (p.z() > 0.8) {
+      ++upper, at_first += R == 32;
+      EXPECT_EQ(one.point_variance[i], 0.0) << p.transpose();
+    }
+    if (p.z() > 0.999) {
+      EXPECT_EQ(R, 32.0) << "the pole";
+    }
+    if (p.z() < -0.99) plane_doubled += R > 32;
+  }
+  EXPECT_GT(upper, 10u);
+  EXPECT_GT(at_first, 0u);
+  EXPECT_GT(plane_doubled, 0u);
+  EXPECT_EQ(static_cast<double>(one.rays), sum);
+  EXPECT_LT(sum, 0.95 * 512 * double(mesh.num_vertices()));
+  bool recorded = false;
+  for (const auto& [k, v] : one.metadata) recorded |= k == "early_stop";
+  EXPECT_TRUE(recorded);
+  o.transfer.threads = 2;
+  const BakeResult two = bake(mesh, o);
+  EXPECT_EQ(two.transfer, one.transfer);
+  EXPECT_EQ(two.vertex_rays, one.vertex_rays);
+  o.round_rays = 31;
+  EXPECT_THROW(bake(mesh, o), InputError);
+}
+
 TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {
   BakeOptions o;
   o.signal = AssetSignal::Ao;

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The daemon-free recipe (examples/slurm/parallel.sh): the bundled example in 3 shards with GNU
-# parallel, merged, must be byte for byte the one-process bake. Without GNU parallel the test
+# parallel, merged, must be byte for byte the one-process bake (with per-vertex early stop, whose
+# rounds are phases of their own). Without GNU parallel the test
 # skips (77), except in CI, whose .ci/deps installs it.
 #   parallel_test.sh PRTSUB WORK_DIR
 set -euo pipefail
@@ -13,7 +14,7 @@ if ! command -v parallel > /dev/null; then
 fi
 rm -rf "$work" && mkdir -p "$work" && cd "$work"
 mesh=$root/examples/spot/spot_control_mesh.obj
-options=(--rays 64 --order 3)
+options=(--rays 64 --order 3 --first-rays 16)
 "$prtsub" bake "$mesh" "${options[@]}" -o single.ply > single.log
 PRTSUB=$prtsub JOBS=2 bash "$root/examples/slurm/parallel.sh" 3 parts sharded.ply "$mesh" "${options[@]}" > sharded.log
 ls parts
