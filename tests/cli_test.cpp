@@ -175,6 +175,30 @@ TEST_F(Cli, OrderAutoBakesAtTheOrderItChoseAndSaysWhy) {
   EXPECT_NE(err.find("--order auto is for bake"), std::string::npos) << err;
 }
 
+TEST_F(Cli, EarlyStopSaysHowManyRaysEachVertexTracedAndRaysFixedTurnsItOff) {
+  const std::string in = scene(), asset = dir.path("a.ply"), fixed = dir.path("f.ply");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--first-rays", "8", "--rays", "64", "--fit", "point", "--report", dir.path("a.json")}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", fixed, "--first-rays", "8", "--rays-fixed", "64", "--fit", "point", "--report", dir.path("f.json")}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("  early stop: from 8 rays, "), std::string::npos) << out;
+  EXPECT_NE(out.find("vertices by rays: 8: "), std::string::npos) << out;
+  const std::string j = read_file_bytes(dir.path("a.json")), f = read_file_bytes(dir.path("f.json"));
+  const double V = test::json_number(j, "vertices_out");
+  // Every vertex's count is in the distribution, and the rays are the first round's plus the rounds'.
+  EXPECT_EQ(test::json_number(j, "rays"), 8 * V + test::json_number(j, "early_stop_rays"));
+  EXPECT_NEAR(test::json_number(j, "vertex_rays_mean") * V, test::json_number(j, "rays"), 1e-6 * test::json_number(j, "rays"));
+  EXPECT_GT(test::json_number(j, "early_stop_rays"), 0);  // the sphere's lower half sees the plane
+  EXPECT_LT(test::json_number(j, "rays"), 64 * V);        // its upper half does not
+  EXPECT_LE(test::json_number(j, "early_stop_rounds"), 3);
+  EXPECT_EQ(test::json_number(f, "rays"), 64 * V);  // --rays-fixed: no early stop
+  EXPECT_EQ(f.find("\"early_stop_rounds\""), std::string::npos);
+  const auto& meta = read_asset(asset).metadata;
+  bool recorded = false;
+  for (const auto& [k, v] : meta) recorded |= k == "early_stop";
+  EXPECT_TRUE(recorded);
+}
+
 TEST_F(Cli, BenchTimesABouncePassAgainstTheBareClosestHitLoopOverTheSameRays) {
   // Every ray from inside a closed room hits; from a plate under the open sky, none does.
   const std::string room = dir.path("room.obj"), plate = dir.path("plate.obj");
@@ -448,6 +472,8 @@ TEST_F(Cli, EveryUsageMistakeExitsTwoWithOneLineNamingTheOption) {
       {"--budget", {"bake", in, "-o", out, "--refine", "adaptive"}},
       {"--levels", {"bake", in, "-o", out, "--refine", "uniform", "--levels", "9"}},
       {"--order", {"bake", in, "-o", out, "--order", "11"}},
+      {"--first-rays", {"bake", in, "-o", out, "--first-rays", "33"}},
+      {"--ray-noise", {"bake", in, "-o", out, "--first-rays", "32", "--ray-noise", "-1"}},
       {"--light", {"render", asset, "--light", "moon:1", "-o", frame}},
       {"--light", {"render", asset, "--light", "sun:0,0,0", "-o", frame}},
       {"--light", {"render", asset, "--light", "sh:1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17", "-o", frame}},
