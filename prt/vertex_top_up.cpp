@@ -27,6 +27,14 @@
 // independent lattices with seeds of their own.
 // Vertices are traced one bucket per (doublings, rays so far), so the result is a function of
 // the plan, which is a function of the first round: not of threads.
+//
+// Early stop (early_stop_vertices) uses the same rounds the other way round: instead of a
+// budget planned once, every vertex doubles round by round until a doubling is worth less than
+// its rays, v·w ≤ price·R, which gives the same √(w c) allocation (the derivative of w c/R is
+// −w c/R², so a doubling from R to 2R removes w v/2 for R rays). The price is set from the
+// noise a vertex of mean area may keep at the most rays. The merged variance it stops on is the
+// upper estimate above, so it stops later than it needs to (BENCHMARKS.md, "Per-vertex early
+// stop", for what that costs the fit).
 #include "prtsub/prt/vertex_top_up.h"
 
 #include <algorithm>
@@ -277,10 +285,10 @@ EarlyStopStats early_stop_vertices(const Mesh& mesh, const RayScene& scene, cons
     plan.level.assign(V, -1);
     for (size_t i = 0; i < V; ++i) {
       // The faces around guard against a lucky estimate (one vertex's is a chi-square of few
-      // degrees of freedom). Trusting a vertex still exact after a doubling instead doubled the
-      // error of the test's ground (it missed the plate low on its horizon): it doubles on.
-      const double v = std::max(variance[i], around[i]);
-      if (2 * rays[i] <= max_rays && v * area[i] / std::max(mean_area, 1e-300) > stop_variance * rays[i] / max_rays) plan.level[i] = 1, ++plan.vertices, plan.rays += uint64_t(rays[i]);
+      // degrees of freedom). Trusting a vertex still exact after a doubling was tried: on the
+      // test's ground it lost to a fixed count (vertices missed the plate low on their horizon).
+      const double v = std::max(variance[i], around[i]), w = area[i] / std::max(mean_area, 1e-300);
+      if (2 * rays[i] <= max_rays && v * w > stop_variance * rays[i] / max_rays) plan.level[i] = 1, ++plan.vertices, plan.rays += uint64_t(rays[i]);
     }
     if (plan.vertices == 0) break;
     if (between_rounds) between_rounds();
