@@ -212,7 +212,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
   if (res.simplified && res.simplify.collapses > 0 && (o.refine != Refinement::Auto || res.refine.splits == 0)) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
-  const bool early = o.round_rays > 0 && o.transfer.rays > o.round_rays;
+  const bool early = early_stop_on(o);
   record_ray_spread(r, res.vertex_rays, early ? o.round_rays : o.transfer.rays);
   r.set("early_stop", early);
   if (early) {

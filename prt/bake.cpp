@@ -48,6 +48,8 @@ const char* refinement_name(Refinement r) {
   return "?";
 }
 
+bool early_stop_on(const BakeOptions& o) { return o.round_rays > 0 && o.transfer.rays > o.round_rays; }
+
 void check_bake_options(const BakeOptions& o) {
   check_transfer_options(o.transfer);
   if (o.round_rays != 0 && (o.round_rays < 2 || o.round_rays % 2 != 0 || o.round_rays > (1 << 20)))
@@ -143,12 +145,10 @@ BakeOptions resolve_bake_options(const BakeOptions& in) {
 
 namespace {
 
-bool early_stop(const BakeOptions& o) { return o.round_rays > 0 && o.transfer.rays > o.round_rays; }
-
 // The vertices' first round: what later rounds at a vertex continue.
 TransferOptions first_round(const BakeOptions& o) {
   TransferOptions t = o.transfer;
-  if (early_stop(o)) t.rays = o.round_rays;
+  if (early_stop_on(o)) t.rays = o.round_rays;
   return t;
 }
 
@@ -156,7 +156,7 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   Metadata m = o.signal == AssetSignal::Ao ? ao_metadata() : sh_convention_metadata(o.transfer.order);
   m.push_back({"source", o.source.empty() ? "(in memory)" : o.source});
   m.push_back({"rays", std::to_string(o.transfer.rays)});
-  if (early_stop(o)) {
+  if (early_stop_on(o)) {
     char buf[200];
     std::snprintf(buf, sizeof buf, "each vertex from %d rays, doubling to at most %d until its noise is at most %g%% of ||t_unshadowed||",
                   o.round_rays, o.transfer.rays, o.stop_noise_percent);
@@ -585,7 +585,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, first, &stats, progress.add, &offsets, &r.point_variance);
   r.rays += stats.rays;
   r.vertex_rays.assign(r.mesh.num_vertices(), first.rays);
-  if (early_stop(o)) {  // the order is known: so is the variance to stop at
+  if (early_stop_on(o)) {  // the order is known: so is the variance to stop at
     const double stop = std::pow(o.stop_noise_percent / 100 * unshadowed_norm(o.transfer.order), 2);
     if (progress.stage) progress.stage("early stop", 0);
     std::function<void()> barrier;

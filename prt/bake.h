@@ -159,6 +159,10 @@ BakeOptions resolve_bake_options(const BakeOptions& options);
 //! Checks options before any work. \throw InputError naming the value at fault
 void check_bake_options(const BakeOptions& options);
 
+//! Whether the vertices stop early: round_rays set and below transfer.rays (else every vertex
+//! traces transfer.rays).
+bool early_stop_on(const BakeOptions& options);
+
 //! A sharded bake (transfer.log set) needs a fixed mesh: adaptive and auto refinement trace
 //! inside their one queue. \throw InputError saying so when `options` would refine adaptively
 void check_fixed_mesh(const BakeOptions& options);

@@ -45,7 +45,7 @@ std::pair<uint32_t, uint32_t> parse_shard(const std::string& text) {
 int shard_phases(const BakeOptions& in) {
   const BakeOptions o = resolve_bake_options(in);
   // The vertices' early-stop rounds each end a phase, then the pilot's stages do.
-  const int early = o.round_rays > 0 && o.transfer.rays > o.round_rays ? early_stop_rounds(o.round_rays, o.transfer.rays) : 0;
+  const int early = early_stop_on(o) ? early_stop_rounds(o.round_rays, o.transfer.rays) : 0;
   if (o.fit.method == FitMethod::Point) return 1 + early;
   if (o.allocation != SampleAllocation::Pilot || o.pilot.rays < 2) return 1 + early;
   return (o.pilot.first_share > 0 && o.pilot.first_share < 1 ? 3 : 2) + early;
