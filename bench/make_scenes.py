@@ -4,7 +4,10 @@ refinement benchmark, spot_on_ground.obj (Spot's control mesh standing on a squa
 and icosphere_on_plane.obj (a level-1 icosphere resting on a two-triangle plane, as in the
 tests), icosphere4.obj (a lone level-4 icosphere: smooth, unoccluded transfer for the fit), and
 voxel_world.obj (a 96x96 heightmap of unit cubes, seeded, with only the exposed faces: columns
-that touch diagonally share edges of four faces, a voxel world's non-manifold edges).
+that touch diagonally share edges of four faces, a voxel world's non-manifold edges), and
+cornell_coloured.ply (the shared Cornell box with its classic albedos as 8-bit sRGB vertex
+colours: the left wall red, the right green, the rest white; every triangle has its own
+corners, so a colour never bleeds across a wall's edge).
 
 usage: make_scenes.py SHARED_SCENES_DIR OUT_DIR"""
 import math
@@ -128,6 +131,36 @@ def voxel_world(n=96, seed=7):
     return verts, faces
 
 
+# The Cornell box's albedos (linear), as the original scene gives them.
+CORNELL = {"red": (0.63, 0.065, 0.05), "green": (0.14, 0.45, 0.091), "white": (0.725, 0.71, 0.68)}
+
+
+def srgb8(c):
+    e = 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+    return max(0, min(255, round(255 * e)))
+
+
+def cornell_coloured(shared, path):
+    v, f = read_obj(os.path.join(shared, "cornell_box.obj"))
+    tris = []
+    for face in f:  # fans, as prtsub triangulates
+        for k in range(1, len(face) - 1):
+            tris.append((face[0], face[k], face[k + 1]))
+    with open(path, "w") as out:
+        out.write("ply\nformat ascii 1.0\ncomment the shared cornell_box.obj with the Cornell albedos as sRGB vertex colours\n")
+        out.write("element vertex %d\nproperty float x\nproperty float y\nproperty float z\n" % (3 * len(tris)))
+        out.write("property uchar red\nproperty uchar green\nproperty uchar blue\n")
+        out.write("element face %d\nproperty list uchar int vertex_indices\nend_header\n" % len(tris))
+        for t in tris:
+            xs = [v[i - 1][0] for i in t]
+            name = "red" if max(xs) < -0.98 else "green" if min(xs) > 0.98 else "white"
+            rgb = [srgb8(c) for c in CORNELL[name]]
+            for i in t:
+                out.write("%g %g %g %d %d %d\n" % (v[i - 1] + tuple(rgb)))
+        for k in range(len(tris)):
+            out.write("3 %d %d %d\n" % (3 * k, 3 * k + 1, 3 * k + 2))
+
+
 def main():
     shared, out = sys.argv[1], sys.argv[2]
     os.makedirs(out, exist_ok=True)
@@ -144,6 +177,7 @@ def main():
     write_obj(os.path.join(out, "icosphere4.obj"), v, f, "level-4 icosphere, nothing else")
     v, f = voxel_world()
     write_obj(os.path.join(out, "voxel_world.obj"), v, f, "96x96 voxel heightmap, exposed faces only")
+    cornell_coloured(shared, os.path.join(out, "cornell_coloured.ply"))
 
 
 if __name__ == "__main__":

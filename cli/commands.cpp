@@ -263,8 +263,8 @@ int cmd_bake(int argc, char** argv) {
   const std::string key = bake_key(bytes, key_options, output);
   res.metadata.push_back({"bake_key", key});
   clock.lap();
-  if (to_gltf) write_gltf_asset(output, res.mesh, res.transfer, res.metadata, options.signal, gltf);
-  else write_asset(output, res.mesh, res.transfer, res.metadata, options.signal);
+  if (to_gltf) write_gltf_asset(output, res.mesh, res.transfer, res.metadata, options.signal, gltf, res.albedo);
+  else write_asset(output, res.mesh, res.transfer, res.metadata, options.signal, res.albedo);
   const double seconds_write = clock.lap();
 
   Report r;
@@ -343,8 +343,10 @@ Report inspect_record(const std::string& input, const Asset& a) {
     if (std::abs(a.normals.row(i).norm() - 1.0) > 1e-3) ++bad_normals;
   std::vector<double> band(static_cast<size_t>(a.order), 0.0);
   double total = 0;
+  const Eigen::Index stride = ao ? 1 : a.transfer.cols() / a.channels;  // RGB: every channel's bands
   for (int l = 0; l < a.order; ++l) {
-    for (int m = -l; m <= l; ++m) band[static_cast<size_t>(l)] += a.transfer.col(sh_index(l, m)).squaredNorm();
+    for (int c = 0; c < a.channels; ++c)
+      for (int m = -l; m <= l; ++m) band[static_cast<size_t>(l)] += a.transfer.col(c * stride + sh_index(l, m)).squaredNorm();
     total += band[static_cast<size_t>(l)];
   }
   Report r;
@@ -355,6 +357,9 @@ Report inspect_record(const std::string& input, const Asset& a) {
   r.set("signal", ao ? "ao" : "transfer");
   r.set("order", a.order);
   r.set("coefficients", sh_count(a.order));
+  r.set("channels", a.channels);
+  r.set("channels_text", a.channels == 3 ? ", per channel: RGB transfer" : "");
+  r.set("albedo", a.albedo.rows() > 0 ? "; albedo per vertex (albedo_r/g/b)" : "");
   r.set("normals_not_unit", bad_normals);
   if (ao && V > 0) {
     r.set("ao_min", a.transfer.minCoeff() * kAoPerT0);
@@ -386,7 +391,7 @@ int cmd_inspect(int argc, char** argv) {
   const bool ao = a.signal == AssetSignal::Ao;
   r.print(stdout, {"prtsub inspect: {input}", "  vertices:   {vertices}", "  triangles:  {triangles}",
                    ao ? "  signal:     ambient occlusion, one ao per vertex, from {ao_min:4} to {ao_max:4} (mean {ao_mean:4})"
-                      : "  sh order:   {order} ({coefficients} coefficients per vertex)"});
+                      : "  sh order:   {order} ({coefficients} coefficients per vertex{channels_text}){albedo}"});
   for (const auto& [k, v] : a.metadata) std::printf("  meta:       %s %s\n", k.c_str(), v.c_str());
   r.print(stdout, {"  checks:     finite values, indices in range, {normals_not_unit} of {vertices} normals not unit length"});
   if (!ao) {
@@ -486,6 +491,10 @@ int cmd_eval(int argc, char** argv) {
   if (reference_bounces >= 0) ro.bounces = reference_bounces;
   if (reference_albedo >= 0) ro.albedo = reference_albedo;
   const Mesh src = load_mesh(source, LoadOptions{crease});
+  if (asset.channels == 3) {  // coloured bounces: the reference bounces with the same albedo, over the source
+    if (reference_albedo >= 0) throw UsageError("eval: " + input + " holds coloured bounces; --reference-albedo is for grey ones");
+    ro.colour = std::make_shared<const AlbedoField>(src, cli_load_albedo(bounces.spec));
+  }
   const RayScene scene(src.positions, position_triangles(src));
   Progress progress("reference", static_cast<size_t>(ro.points) * (ro.bounces > 0 ? 2 : 1), stderr_is_terminal());
   const Reference ref = make_reference(src, scene, ro, [&](size_t n) { progress.add(n); });
@@ -511,8 +520,10 @@ int cmd_eval(int argc, char** argv) {
   r.set("unlocated_points", e.unlocated);
   r.set("reference_bounces", ref.bounces);
   r.set("asset_bounces", bounces.bounces);
+  r.set("channels", asset.channels);
   if (ref.bounces > 0) {
-    r.set("albedo", ro.albedo);
+    if (ro.colour) r.set("albedo", albedo_description(bounces.spec));
+    else r.set("albedo", ro.albedo);
     r.set("reference_paths", ref.paths);
     r.set("seconds_reference_bounces", ref.seconds_bounce);
   }

@@ -80,4 +80,18 @@ void cli_write_image(const std::string& path, const Image& image, const ImageWri
   write_file_atomically(path, bytes);
 }
 
+AlbedoSpec cli_load_albedo(AlbedoSpec spec) {
+  if (spec.source == AlbedoSource::Map && !spec.image) spec.image = std::make_shared<const Image>(cli_read_image(spec.map));
+  return spec;
+}
+
+std::shared_ptr<const AlbedoField> cli_asset_albedo(const Asset& asset, const std::string& path) {
+  const AssetBounces b = asset_bounces(asset, path);
+  if (!b.spec.coloured()) return nullptr;
+  if (asset.albedo.rows() == 0) throw InputError(path + ": the metadata names a coloured albedo, but the vertices carry none (albedo_r/g/b)");
+  std::shared_ptr<const Image> map;
+  if (b.spec.source == AlbedoSource::Map) map = cli_load_albedo(b.spec).image;
+  return std::make_shared<const AlbedoField>(asset.triangles, asset.uv, asset.albedo, map);
+}
+
 }  // namespace prtsub

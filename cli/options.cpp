@@ -1,6 +1,7 @@
 #include "cli/options.h"
 
 #include "cli/specs.h"
+#include "cli/images.h"
 #include "prtsub/prt/sh.h"
 
 namespace prtsub {
@@ -56,7 +57,10 @@ void BakeCli::add_fit(ArgParser& args) {
               {AssetSignal::Transfer, AssetSignal::Ao}, asset_signal_name);
   args.option("--bounces", "N|auto", "interreflection: N bounces of light between the mesh's surfaces (0: direct only), or auto:\n"
               "until a pass adds less than the bake's own noise (at most 16) [default 0]", &bounces_);
-  args.option("--albedo", "A", "interreflection: the surfaces' diffuse albedo [default 0.8]", &bake.bounce.albedo, 0.0, 1.0);
+  args.option("--albedo", "A|R,G,B|vertex", "the surfaces' diffuse albedo for interreflection: grey A, linear R,G,B (coloured\n"
+              "bounces: RGB transfer), or the input's vertex colours (sRGB, decoded) [default 0.8]", &albedo_);
+  args.option("--albedo-map", "PATH", "the albedo from a diffuse texture through the input's UVs (8-bit images are sRGB,\n"
+              "decoded; EXR/HDR linear): coloured bounces, RGB transfer", &albedo_map_);
   args.flag("--bounce-vertices-only", "interreflection: bounce at the vertices only, not also at the fit's samples before\n"
             "fitting again", &bounce_vertices_only_);
   args.choice("--bounce-cache", "interreflection: keep each ray's hit between passes (auto: while under 1 GiB)", &bake.bounce.cache,
@@ -142,6 +146,20 @@ BakeOptions BakeCli::options() const {
     if (end != bounces_.c_str() + bounces_.size() || n < 0 || n > 64)
       throw UsageError("--bounces: expected 0 to 64 or auto, got '" + bounces_ + "'");
     o.bounce.bounces = static_cast<int>(n);
+  }
+  if (!albedo_.empty() && !albedo_map_.empty()) throw UsageError("--albedo and --albedo-map: give one");
+  if (!albedo_.empty()) {
+    try {
+      const AlbedoSpec a = parse_albedo(albedo_);
+      if (a.coloured()) o.albedo_colour = a;
+      else o.bounce.albedo = a.constant.x();
+    } catch (const InputError& e) {
+      throw UsageError(std::string("--albedo: ") + e.what());
+    }
+  }
+  if (!albedo_map_.empty()) {
+    o.albedo_colour.source = AlbedoSource::Map, o.albedo_colour.map = albedo_map_;
+    o.albedo_colour.image = std::make_shared<const Image>(cli_read_image(albedo_map_));
   }
   if (order_ == "auto") {
     o.order_auto = true;

@@ -45,6 +45,7 @@ struct BakeCli {
   bool no_control_variate_ = false, no_noise_weighting_ = false, bounce_vertices_only_ = false;
   int rays_fixed_ = 0;  // --rays-fixed R: no early stop
   std::string bounces_;  // --bounces N|auto
+  std::string albedo_, albedo_map_;  // --albedo A|R,G,B|vertex, --albedo-map PATH
   std::string order_;    // --order N|auto
   std::vector<std::string> order_lights_;  // --order-light SPEC
 };

@@ -17,7 +17,7 @@ namespace {
 struct RenderCli {
   std::string input, output, report, size = "800,600", camera = "auto";
   std::vector<std::string> lights, rotations;
-  double albedo = 0.8, exposure = 1.0;
+  double albedo = -1, exposure = 1.0;  // albedo < 0: the asset's (its per-vertex albedo, or 0.8)
   bool reference = false, compare_bare = false;
   int reference_order = 0;  // 0: the asset's
   TransferOptions transfer;  // the reference's rays, seed and threads; the order is the asset's
@@ -25,7 +25,7 @@ struct RenderCli {
 
 // The per-pixel reference frame, and optionally the bare loop's rate over the same rays.
 Image reference_frame(const RayScene& scene, const SurfaceHits& hits, const Asset& asset, const ShLight& light,
-                      const RenderCli& c, Report& r) {
+                      const RenderCli& c, const std::shared_ptr<const AlbedoField>& colour, Report& r) {
   TransferOptions topt = c.transfer;
   topt.order = c.reference_order > 0 ? c.reference_order : asset.order;
   TransferStats stats;
@@ -34,14 +34,18 @@ Image reference_frame(const RayScene& scene, const SurfaceHits& hits, const Asse
   PathOptions bounced;
   bounced.bounces = b.bounces, bounced.albedo = b.albedo, bounced.paths = topt.rays, bounced.seed = topt.seed + 1;
   bounced.threads = topt.threads;
-  if (b.bounces > 0 && std::abs(b.albedo - c.albedo) > 1e-9)
+  if (b.bounces > 0 && !colour && std::abs(b.albedo - c.albedo) > 1e-9)
     std::fprintf(stderr, "prtsub render: warning: %s was baked with bounces at albedo %g; shading at --albedo %g\n", c.input.c_str(),
                  b.albedo, c.albedo);
   Progress progress("reference", hits.covered() * (b.bounces > 0 ? 2 : 1), stderr_is_terminal());
   Image frame = render_reference(scene, hits, asset.positions, asset.normals, asset.triangles, light, c.albedo, topt, &stats,
-                                 [&](size_t n) { progress.add(n); }, b.bounces > 0 ? &bounced : nullptr);
+                                 [&](size_t n) { progress.add(n); }, b.bounces > 0 ? &bounced : nullptr, colour);
   progress.finish();
-  if (b.bounces > 0) r.set("reference_bounces", b.bounces), r.set("reference_albedo", b.albedo);
+  if (b.bounces > 0) {
+    r.set("reference_bounces", b.bounces);
+    if (b.coloured) r.set("reference_albedo", albedo_description(b.spec));
+    else r.set("reference_albedo", b.albedo);
+  }
   r.set("rays", stats.rays);
   r.set("rays_per_pixel", topt.rays);
   r.set("reference_rays_per_second", static_cast<double>(stats.rays) / std::max(stats.seconds, 1e-9));
@@ -78,7 +82,7 @@ int cmd_render(int argc, char** argv) {
   args.alias("-o", "--output");
   args.option("--size", "W,H", "frame size in pixels [default 800,600]", &c.size);
   args.option("--camera", "auto|eye=X,Y,Z:target=X,Y,Z:up=X,Y,Z:fov=DEG", "camera [default auto]", &c.camera);
-  args.option("--albedo", "A", "diffuse albedo", &c.albedo, 0.0, 1.0);
+  args.option("--albedo", "A", "diffuse albedo, grey [default the asset's: the albedo it stores per vertex, else 0.8]", &c.albedo, 0.0, 1.0);
   args.option("--exposure", "E", "PNG only: linear radiance is multiplied by E before the sRGB curve", &c.exposure, 0.0, 1e6);
   args.flag("--reference", "render the per-pixel reference instead of the Gouraud frame", &c.reference);
   args.option("--reference-order", "N", "the reference's SH order (and the light's), to see what the asset's order leaves out\n"
@@ -110,8 +114,13 @@ int cmd_render(int argc, char** argv) {
   r.set("seconds_scene", clock.lap());
   const SurfaceHits hits = trace_primary(scene, camera, width, height, c.transfer.threads);
   const double t_primary = clock.lap();
-  const Image frame = c.reference ? reference_frame(scene, hits, asset, light, c, r)
-                                  : shade_gouraud(hits, asset.triangles, vertex_radiance(asset.transfer, light, c.albedo));
+  // A coloured asset shades with the albedo it stores (and its bounces carry it).
+  const std::shared_ptr<const AlbedoField> colour = cli_asset_albedo(asset, c.input);
+  if (colour && c.albedo >= 0) throw UsageError("render: " + c.input + " stores its own albedo per vertex; --albedo is for grey assets");
+  if (c.albedo < 0) c.albedo = 0.8;
+  const Image frame = c.reference ? reference_frame(scene, hits, asset, light, c, colour, r)
+                                  : shade_gouraud(hits, asset.triangles, colour ? vertex_radiance(asset.transfer, light, asset.albedo)
+                                                                                : vertex_radiance(asset.transfer, light, c.albedo));
   const double t_shade = clock.lap();
   cli_write_image(c.output, frame, ImageWriteOptions{c.exposure});
   r.set("seconds_write", clock.lap());

@@ -198,8 +198,11 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
   r.set("bounces", res.bounce.passes);
+  r.set("channels", o.signal == AssetSignal::Ao ? 1 : std::max(transfer_channels(res.transfer.cols()), 1));
+  if (o.albedo_colour.coloured()) r.set("albedo_source", albedo_description(o.albedo_colour));
   if (res.bounce.passes > 0) {
-    r.set("albedo", o.bounce.albedo);
+    if (o.albedo_colour.coloured()) r.set("albedo", albedo_description(o.albedo_colour) + ", RGB transfer");
+    else r.set("albedo", o.bounce.albedo);
     r.set("bounces_auto", o.bounce.until_converged);
     r.set("bounce_change_percent", res.bounce.change_percent.back());
     for (size_t k = 0; k < res.bounce.change_percent.size(); ++k)

@@ -42,6 +42,7 @@ int cmd_view(int argc, char** argv) {
   o.name = input;
   ErrorView error;
   if (!source.empty()) {
+    if (asset.channels == 3) throw UsageError("view: the error view is for grey transfer; " + input + " holds RGB transfer (coloured bounces)");
     std::map<std::string, std::string> meta(asset.metadata.begin(), asset.metadata.end());
     const int asset_rays = meta.count("rays") ? std::atoi(meta["rays"].c_str()) : TransferOptions{}.rays;
     const double crease = meta.count("crease_angle") ? std::atof(meta["crease_angle"].c_str()) : LoadOptions{}.crease_angle_deg;

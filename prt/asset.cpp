@@ -27,6 +27,12 @@ void put(std::string& out, T v) {
   out.append(b, sizeof(T));
 }
 
+// t7 for grey transfer; r_t7, g_t7, b_t7 for the channels of RGB transfer.
+std::string transfer_property(int channels, Eigen::Index per_channel, Eigen::Index column) {
+  if (channels == 1) return "t" + std::to_string(column);
+  return std::string(1, "rgb"[column / per_channel]) + "_t" + std::to_string(column % per_channel);
+}
+
 bool host_is_little_endian() {
   const uint16_t one = 1;
   unsigned char b;
@@ -68,24 +74,52 @@ Mesh asset_mesh(const Asset& a) {
   return m;
 }
 
+namespace {
+
+// The `albedo` line as bake writes it (albedo_description): R,G,B, a grey A, "vertex ..." or
+// "map PATH (through the UVs...)".
+AlbedoSpec parse_albedo_metadata(const std::string& value, const std::string& path) {
+  if (value.rfind("vertex", 0) == 0) return parse_albedo("vertex");
+  if (value.rfind("map ", 0) == 0) {
+    AlbedoSpec s;
+    s.source = AlbedoSource::Map;
+    const size_t end = value.rfind(" (through the UVs");
+    s.map = value.substr(4, end == std::string::npos ? std::string::npos : end - 4);
+    return s;
+  }
+  try {
+    return parse_albedo(value);
+  } catch (const InputError& e) {
+    throw InputError(path + ": metadata 'albedo " + value + "': " + e.what());
+  }
+}
+
+}  // namespace
+
 AssetBounces asset_bounces(const Asset& asset, const std::string& path) {
-  // bake writes "bounces N (albedo A; ...)" (docs/asset_format.md).
+  // bake writes "bounces N (albedo A; ...)", or "N (albedo coloured; ...)" beside an `albedo`
+  // line (docs/asset_format.md).
   AssetBounces b;
   for (const auto& [key, value] : asset.metadata) {
+    if (key == "albedo") b.spec = parse_albedo_metadata(value, path);
     if (key != "bounces") continue;
     char* end = nullptr;
     const long n = std::strtol(value.c_str(), &end, 10);
     const size_t at = value.find("(albedo ");
-    const double a = at == std::string::npos ? -1 : std::strtod(value.c_str() + at + 8, nullptr);
+    const bool coloured = at != std::string::npos && value.compare(at + 8, 8, "coloured") == 0;
+    const double a = at == std::string::npos ? -1 : coloured ? 0 : std::strtod(value.c_str() + at + 8, nullptr);
     if (end == value.c_str() || n < 0 || n > 64 || !(a >= 0 && a <= 1))
       throw InputError(path + ": metadata 'bounces " + value + "' is not 'N (albedo A; ...)' with N in 0..64 and A in [0, 1]");
-    b.bounces = static_cast<int>(n), b.albedo = a;
+    b.bounces = static_cast<int>(n), b.albedo = a, b.coloured = coloured;
   }
+  if (b.coloured && !b.spec.coloured()) throw InputError(path + ": metadata says the bounces are coloured but has no coloured 'albedo' line");
+  if (b.coloured != (asset.channels == 3) && b.bounces > 0)
+    throw InputError(path + ": metadata 'bounces' does not match the asset's " + std::to_string(asset.channels) + " transfer channel(s)");
   return b;
 }
 
-Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal) {
-  check_asset_input("(in memory)", mesh, transfer, signal);
+Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal, const RowMatrixX3d& albedo) {
+  check_asset_input("(in memory)", mesh, transfer, signal, albedo);
   Asset a;
   a.positions = vertex_positions(mesh);
   a.normals = mesh.normals;
@@ -95,7 +129,9 @@ Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& 
   a.source_face = mesh.source_face;
   a.metadata = metadata;
   a.signal = signal;
-  a.order = signal == AssetSignal::Ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(transfer.cols()))));
+  a.albedo = albedo;
+  a.channels = signal == AssetSignal::Ao ? 1 : transfer_channels(transfer.cols());
+  a.order = signal == AssetSignal::Ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(transfer.cols() / a.channels))));
   return a;
 }
 
@@ -116,9 +152,15 @@ Metadata ao_metadata() {
   };
 }
 
-void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal) {
+void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal, const RowMatrixX3d& albedo) {
   if (signal == AssetSignal::Ao && transfer.cols() != 1)
     throw InputError(path + ": an AO asset takes one value per vertex, got " + std::to_string(transfer.cols()));
+  if (signal == AssetSignal::Transfer && transfer_channels(transfer.cols()) == 0)
+    throw InputError(path + ": " + std::to_string(transfer.cols()) + " transfer values per vertex is neither N² nor 3·N² for an order N of 1 to 10");
+  if (albedo.rows() > 0 && static_cast<size_t>(albedo.rows()) != mesh.num_vertices())
+    throw InputError(path + ": " + std::to_string(albedo.rows()) + " albedos for " + std::to_string(mesh.num_vertices()) + " vertices");
+  if (albedo.rows() > 0 && !(albedo.allFinite() && albedo.minCoeff() >= 0 && albedo.maxCoeff() <= 1))
+    throw InputError(path + ": refusing to write an albedo outside [0, 1]");
   if (!host_is_little_endian()) throw IoError(path + ": big-endian hosts are not supported");
   const size_t V = mesh.num_vertices();
   const Eigen::Index K = transfer.cols();
@@ -142,8 +184,8 @@ void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatri
 }
 
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
-                 const Metadata& metadata, AssetSignal signal) {
-  check_asset_input(path, mesh, transfer_in, signal);
+                 const Metadata& metadata, AssetSignal signal, const RowMatrixX3d& albedo) {
+  check_asset_input(path, mesh, transfer_in, signal, albedo);
   const RowMatrixXd transfer = signal == AssetSignal::Ao ? RowMatrixXd(transfer_in * kAoPerT0) : transfer_in;
   const size_t V = mesh.num_vertices(), F = mesh.num_faces();
   const Eigen::Index K = transfer.cols();
@@ -161,9 +203,11 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   out += "element vertex " + std::to_string(V) + "\n";
   for (const char* p : {"x", "y", "z", "nx", "ny", "nz"}) out += std::string("property float ") + p + "\n";
   if (uv) out += "property float u\nproperty float v\n";
+  if (albedo.rows() > 0) out += "property float albedo_r\nproperty float albedo_g\nproperty float albedo_b\n";
+  const int channels = signal == AssetSignal::Ao ? 1 : transfer_channels(K);
   if (signal == AssetSignal::Ao) out += "property float ao\n";
   else
-    for (Eigen::Index c = 0; c < K; ++c) out += "property float t" + std::to_string(c) + "\n";
+    for (Eigen::Index c = 0; c < K; ++c) out += "property float " + transfer_property(channels, K / channels, c) + "\n";
   out += "element face " + std::to_string(F) + "\n";
   out += "property list uchar int vertex_indices\nproperty int source_face\nend_header\n";
   for (size_t v = 0; v < V; ++v) {
@@ -172,6 +216,8 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
     for (int c = 0; c < 3; ++c) put(out, static_cast<float>(mesh.normals(vi, c)));
     if (uv)
       for (int c = 0; c < 2; ++c) put(out, static_cast<float>(mesh.uv(vi, c)));
+    if (albedo.rows() > 0)
+      for (int c = 0; c < 3; ++c) put(out, static_cast<float>(albedo(vi, c)));
     for (Eigen::Index c = 0; c < K; ++c) put(out, static_cast<float>(transfer(vi, c)));
   }
   for (size_t f = 0; f < F; ++f) {
@@ -219,8 +265,33 @@ Asset parse_asset(const std::string& bytes, const std::string& path) {
     }
     if (!a.uv.allFinite()) throw InputError(path + ": a UV holds NaN or Inf");
   }
+  if (v->scalar("albedo_r") || v->scalar("albedo_g") || v->scalar("albedo_b")) {
+    a.albedo.resize(V, 3);
+    for (int c = 0; c < 3; ++c) {
+      const auto& col = column(c == 0 ? "albedo_r" : c == 1 ? "albedo_g" : "albedo_b");
+      for (Eigen::Index i = 0; i < V; ++i) a.albedo(i, c) = col[static_cast<size_t>(i)];
+    }
+    if (!(a.albedo.allFinite() && a.albedo.minCoeff() >= 0 && a.albedo.maxCoeff() <= 1))
+      throw InputError(path + ": an albedo is outside [0, 1] or not finite");
+  }
   int K = 0;
   while (v->scalar("t" + std::to_string(K))) ++K;
+  if (K == 0 && v->scalar("r_t0")) {  // RGB transfer: three blocks of N²
+    int n = 0;
+    while (v->scalar("r_t" + std::to_string(n))) ++n;
+    const int order = static_cast<int>(std::lround(std::sqrt(n)));
+    if (order * order != n || order > kMaxShOrder)
+      throw InputError(path + ": asset has " + std::to_string(n) + " red transfer coefficients; expected N² for an order N of 1 to 10");
+    a.channels = 3, a.order = order;
+    a.transfer.resize(V, 3 * n);
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < n; ++k) {
+        const std::string name = std::string(1, "rgb"[c]) + "_t" + std::to_string(k);
+        const auto& col = column(name.c_str());
+        for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, c * n + k) = col[static_cast<size_t>(i)];
+      }
+    K = -1;  // read
+  }
   if (K == 0 && v->scalar("ao")) {
     a.signal = AssetSignal::Ao;
     a.order = 1;

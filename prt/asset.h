@@ -6,7 +6,9 @@
 #include <utility>
 #include <vector>
 
+#include "prtsub/prt/albedo.h"
 #include "prtsub/prt/output_file.h"
+#include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
@@ -27,11 +29,13 @@ struct Asset {
   RowMatrixX3d positions;             //!< #V by 3
   RowMatrixX3d normals;               //!< #V by 3
   RowMatrixX2d uv;                    //!< #V by 2, or no rows when the asset has none
-  RowMatrixXd transfer;               //!< #V by N²
+  RowMatrixXd transfer;               //!< #V by N², or #V by 3·N² (channels 3: red, green, blue blocks)
+  RowMatrixX3d albedo;                //!< #V by 3 linear albedo, or no rows (a grey bake records none)
   std::vector<Triangle> triangles;    //!< #F
   std::vector<uint32_t> source_face;  //!< #F
   Metadata metadata;                  //!< "key value" comment lines, in order
   int order = 0;                      //!< 1 for AO assets
+  int channels = 1;                   //!< 3: RGB transfer (a coloured albedo that bounced)
   AssetSignal signal = AssetSignal::Transfer;  //!< ao assets are read into transfer as t0 = ao / kAoPerT0
 };
 
@@ -41,7 +45,9 @@ Mesh asset_mesh(const Asset& asset);
 
 //! The asset write_asset would write, without the file: render-vertex positions, the mesh's
 //! normals, UVs, triangles and source faces, the values (order-1 transfer for AO).
-Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer);
+//! \param albedo #V by 3 linear albedo per vertex, or no rows
+Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer,
+                 const RowMatrixX3d& albedo = RowMatrixX3d());
 
 //! AO: clamps order-1 transfer into the AO range [0, 1]·(√π/2); returns how many values moved.
 size_t clamp_ao(RowMatrixXd& t0);
@@ -54,20 +60,26 @@ Metadata ao_metadata();
 
 //! The checks every asset writer makes before writing anything: the transfer's shape, finite
 //! values that fit in float, UVs for every vertex. \throw InputError naming `path`
-void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal);
+void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal,
+                       const RowMatrixX3d& albedo = RowMatrixX3d());
 
 //! Writes mesh + transfer to `path` through a temporary file renamed into place, so a failed
 //! run leaves nothing behind.
-//! \param transfer #V by N², V = mesh.num_vertices(); for AO #V by 1 order-1 transfer, written
-//!        as the property ao = t0 · kAoPerT0
+//! \param transfer #V by N², V = mesh.num_vertices(), or #V by 3·N² for RGB transfer (written as
+//!        r_t*, g_t*, b_t*); for AO #V by 1 order-1 transfer, written as the property ao = t0 · kAoPerT0
+//! \param albedo #V by 3 linear albedo in [0, 1], written as albedo_r, albedo_g, albedo_b; or no rows
 //! \throw InputError if transfer holds NaN/Inf or has the wrong shape, IoError if writing fails
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
-                 const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer);
+                 const Metadata& metadata, AssetSignal signal = AssetSignal::Transfer, const RowMatrixX3d& albedo = RowMatrixX3d());
 
 //! What an asset baked with bounces folded into its transfer (metadata `bounces`).
 struct AssetBounces {
   int bounces = 0;  //!< 0: shadowed transfer only
-  double albedo = 0.8;
+  double albedo = 0.8;  //!< a grey albedo's value
+  //! A coloured albedo (the `albedo` metadata: R,G,B, vertex colours or a map): the bounces then
+  //! carry it, and `albedo` above is unused
+  bool coloured = false;
+  AlbedoSpec spec;  //!< what the `albedo` metadata line says (a grey constant when absent)
 };
 //! \throw InputError naming `path` if the metadata is there but not as bake writes it
 AssetBounces asset_bounces(const Asset& asset, const std::string& path);

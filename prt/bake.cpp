@@ -60,6 +60,11 @@ void check_bake_options(const BakeOptions& o) {
   if (!(o.bounce.albedo >= 0 && o.bounce.albedo <= 1)) throw InputError("albedo must be between 0 and 1, got " + std::to_string(o.bounce.albedo));
   if (o.bounce.bounces > 0 && o.signal == AssetSignal::Ao)
     throw InputError("interreflection is for transfer assets: ambient occlusion is visibility, not light");
+  if (o.albedo_colour.coloured() && o.signal == AssetSignal::Ao)
+    throw InputError("a coloured albedo is for transfer assets: ambient occlusion is visibility, not light");
+  if (o.albedo_colour.source == AlbedoSource::Constant &&
+      !(o.albedo_colour.constant.minCoeff() >= 0 && o.albedo_colour.constant.maxCoeff() <= 1))
+    throw InputError("albedo must be between 0 and 1 in every channel");
   if (o.order_auto && o.signal == AssetSignal::Ao) throw InputError("--order auto is for transfer assets: ambient occlusion has one coefficient");
   if (o.sample_rays < 1 || o.sample_rays > (1 << 20))
     throw InputError("rays per sample must be between 1 and 1048576, got " + std::to_string(o.sample_rays));
@@ -225,12 +230,20 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"noise_weighting", o.fit.weigh_by_noise ? "on" : "off"});
     m.push_back({"non_negative", non_negative_name(o.fit.non_negative)});
   }
+  const bool coloured = o.albedo_colour.coloured();
+  if (coloured) m.push_back({"albedo", albedo_description(o.albedo_colour)});
   if (r.bounce.passes > 0) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "%d (albedo %.4g; the last pass added %.4f%% of ||t_unshadowed||%s)", r.bounce.passes, o.bounce.albedo,
+    char grey[32];
+    std::snprintf(grey, sizeof grey, "%.4g", o.bounce.albedo);
+    const std::string albedo = coloured ? std::string("coloured") : std::string(grey);
+    std::snprintf(buf, sizeof buf, "%d (albedo %s; the last pass added %.4f%% of ||t_unshadowed||%s)", r.bounce.passes, albedo.c_str(),
                   r.bounce.change_percent.back(), o.bounce.until_converged ? ", auto: below the bake's noise" : "");
     m.push_back({"bounces", buf});
     m.push_back({"interreflection", "t_i holds the bounces: each adds (albedo/pi)*integral((1-V)*t_i(hit)*max(n.w,0)); back faces black; radiance=albedo/pi*sum(l_i*t_i)"});
+    if (coloured)
+      m.push_back({"channels", "rgb r_t*, g_t*, b_t*: each channel's transfer bounced by that channel's albedo; the receiver's own albedo "
+                               "(albedo_r/g/b) is not in it: radiance_c=albedo_c/pi*sum(l_c,i*t_c,i)"});
   }
   m.push_back({"generator", std::string("prtsub ") + kVersion});
   return m;
@@ -405,16 +418,23 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
 // fit runs again with the vertices' bounced point values as its prior. A face whose bounced light
 // varies inside it (a wall lit by a bright floor nearby) is then fitted as its direct light is,
 // not interpolated from its corners. The moments' variances stay the direct ones'.
-void fit_bounced_samples(const RayScene& scene, const BakeOptions& o, const RowMatrixXd& before_last, const RowMatrixXd& fitted,
-                         const BakeProgress& progress, BakeResult& r) {
+void fit_bounced_samples(const RayScene& scene, const BakeOptions& o, const BounceOptions& bounce, const RowMatrixXd& before_last,
+                         const RowMatrixXd& fitted, const BakeProgress& progress, BakeResult& r) {
   const SurfaceSamples& s = r.fit_data.samples;
-  BounceOptions b = o.bounce;
+  BounceOptions b = bounce;
   b.rays = o.sample_rays, b.seed = mix64(o.transfer.seed + 23);
   if (progress.stage) progress.stage("bounced samples", 0);
   TransferStats st;
   const RowMatrixXd g = gather_bounce(r.mesh, scene, before_last, s.points, s.normals, s.offsets, b, &st);
   r.rays += st.rays, r.bounce.rays += st.rays, r.bounce.sample_rays = st.rays;
+  // Colour: the direct moments, prior and variances are every channel's (a variance summed over
+  // 3·N² values is three times the one over N²: the weights' ratios stay).
+  const int channels = b.colour ? 3 : 1;
   FaceMoments m = r.fit_data.moments;
+  m.rows = m.rows.replicate(1, channels).eval();
+  for (double& v : m.variance) v *= channels;
+  std::vector<double> point_variance = r.point_variance;
+  for (double& v : point_variance) v *= channels;
   const Eigen::Index K = g.cols();
   Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> face(3, K);
   for (size_t f = 0; f + 1 < s.begin.size(); ++f) {
@@ -423,8 +443,8 @@ void fit_bounced_samples(const RayScene& scene, const BakeOptions& o, const RowM
     m.rows.middleRows(static_cast<Eigen::Index>(3 * f), 3) += face;
   }
   // The prior: the point values with the bounced light the vertices' passes added to the fit.
-  const RowMatrixXd prior = r.point + (r.transfer - fitted);
-  r.transfer = fit_vertex_values(r.mesh, s, m, prior, o.fit, &r.fit, &r.point_variance);
+  const RowMatrixXd prior = r.point.replicate(1, channels) + (r.transfer - fitted.replicate(1, channels));
+  r.transfer = fit_vertex_values(r.mesh, s, m, prior, o.fit, &r.fit, &point_variance);
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
 
@@ -564,6 +584,13 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   BakeOptions o = resolve_bake_options(options);
   check_bake_options(o);
   if (o.transfer.log) check_fixed_mesh(o);
+  if (o.albedo_colour.coloured()) {  // missing colours or UVs fail before any ray, naming the input
+    try {
+      AlbedoField(mesh, o.albedo_colour);
+    } catch (const InputError& e) {
+      throw InputError((o.source.empty() ? std::string("the input") : o.source) + ": " + e.what());
+    }
+  }
   Stopwatch clock;
   BakeResult r;
   r.mesh = o.refine == Refinement::Uniform ? refine_uniform(mesh, o.uniform) : mesh;
@@ -630,6 +657,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
         if (std::isfinite(r.point_variance[i])) num += area[i] * r.point_variance[i], den += area[i];
       b.noise_percent = 100 * std::sqrt(num / std::max(den, 1e-300)) / unshadowed_norm(o.transfer.order);
     }
+    if (o.albedo_colour.coloured()) b.colour = std::make_shared<const AlbedoField>(r.mesh, o.albedo_colour);
     if (progress.stage) progress.stage("bounces", 0);
     RowMatrixXd before_last;
     const RowMatrixXd fitted = r.transfer;
@@ -637,9 +665,11 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     r.rays += r.bounce.rays;
     const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);  // else the samples lie on the input
     if (o.bounce.fit_samples && o.fit.method != FitMethod::Point && r.fit_data.samples.size() > 0 && on_own_samples && r.bounce.passes > 0)
-      fit_bounced_samples(scene, o, before_last, fitted, progress, r);
+      fit_bounced_samples(scene, o, b, before_last, fitted, progress, r);
+    if (b.colour) r.albedo = b.colour->vertices();
     r.seconds_bounce = clock.lap();
   }
+  if (o.albedo_colour.coloured() && r.albedo.rows() == 0) r.albedo = AlbedoField(r.mesh, o.albedo_colour).vertices();
   if (o.signal == AssetSignal::Ao) {
     // The paper's choice: clamp after the fit (a constrained solve is rarely worth it).
     r.clamped = clamp_ao(r.transfer);

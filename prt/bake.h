@@ -93,6 +93,10 @@ struct BakeOptions {
   //! the transfer's. Applied to the asset's values after the fit (refinement and the fit see
   //! direct transfer).
   BounceOptions bounce;
+  //! A coloured albedo (R,G,B, the input's vertex colours or a map through its UVs), in place of
+  //! bounce.albedo's grey: the bounces then give RGB transfer (#V by 3·N²), and the asset records
+  //! the albedo at every vertex. A grey constant (the default) leaves bounce.albedo in charge.
+  AlbedoSpec albedo_colour;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
   //! Stop after refinement (or simplification): the mesh with its point-sampled vertex transfer,
   //! no samples, fit, error target or bounces. Such an asset is a mesh file that later bakes
@@ -119,8 +123,9 @@ struct FitData {
 
 struct BakeResult {
   Mesh mesh;             //!< the output mesh
-  RowMatrixXd transfer;  //!< #V by N²: the asset's values (order-1 transfer for AO)
+  RowMatrixXd transfer;  //!< #V by N²: the asset's values (order-1 transfer for AO); #V by 3·N² when a coloured albedo bounced
   RowMatrixXd point;     //!< #V by N²: the point-sampled values (equal to transfer when fit is point)
+  RowMatrixX3d albedo;   //!< #V by 3: the albedo at each vertex when it is coloured, else no rows
   std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
   RefineStats refine;    //!< adaptive refinement's counts and times
   bool simplified = false;     //!< the budget was below the input's: simplified, not refined

@@ -68,6 +68,12 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
     << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << "\n";
   s << "stage " << (o.refine_only ? "refine" : "all") << "\n";
   s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << " " << o.bounce.fit_samples << "\n";
+  if (o.albedo_colour.coloured()) {  // a map is named and its bytes hashed: an edited texture bakes again
+    s << "albedo " << albedo_description(o.albedo_colour);
+    const std::string map_bytes = o.albedo_colour.source == AlbedoSource::Map ? read_file_bytes(o.albedo_colour.map) : std::string();
+    if (o.albedo_colour.source == AlbedoSource::Map) s << " " << XXH3_64bits(map_bytes.data(), map_bytes.size());
+    s << "\n";
+  }
   s << "crease " << b.load.crease_angle_deg << "\n";
   s << "gltf " << (b.gltf.up == UpAxis::Z ? "z" : "y") << " " << b.gltf.quantize << " " << b.gltf.compress << "\n";
   return s.str();
@@ -177,8 +183,8 @@ std::vector<BatchEntry> bake_batch(const std::vector<BatchJob>& jobs, const Batc
         std::error_code ec;
         if (!parent.empty()) fs::create_directories(parent, ec);
         if (ec) throw IoError(job.output + ": cannot create its folder (" + ec.message() + ")");
-        if (is_gltf_path(job.output)) write_gltf_asset(job.output, result.mesh, result.transfer, result.metadata, o.signal, options.gltf);
-        else write_asset(job.output, result.mesh, result.transfer, result.metadata, o.signal);
+        if (is_gltf_path(job.output)) write_gltf_asset(job.output, result.mesh, result.transfer, result.metadata, o.signal, options.gltf, result.albedo);
+        else write_asset(job.output, result.mesh, result.transfer, result.metadata, o.signal, result.albedo);
         e.status = BatchStatus::Baked;
         e.triangles_out = result.mesh.num_faces();
         e.vertices_out = result.mesh.num_vertices();

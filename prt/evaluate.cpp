@@ -68,11 +68,13 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
   TransferOptions to;
   to.order = o.order, to.rays = o.rays, to.seed = o.seed + 1, to.threads = o.threads;
   ref.transfer = shadowed_transfer(scene, ref.points, ref.normals, to, nullptr, progress);
+  const int channels = o.colour ? 3 : 1;  // RGB: every channel's direct light is the same
+  if (channels == 3) ref.transfer = ref.transfer.replicate(1, 3).eval();
   // Bounced light: paths through the source, from the reference points (their own seeds).
   const PathSurface surface{corners, src.normals, src.triangles};
   PathOptions po;
   po.order = o.order, po.paths = o.paths > 0 ? o.paths : o.rays, po.bounces = o.bounces, po.albedo = o.albedo;
-  po.seed = o.seed + 3, po.threads = o.threads;
+  po.seed = o.seed + 3, po.threads = o.threads, po.colour = o.colour;
   if (o.bounces > 0) {
     const Stopwatch clock;
     ref.transfer += path_traced_transfer(scene, surface, ref.points, ref.normals, po, nullptr, nullptr, progress);
@@ -82,28 +84,50 @@ Reference make_reference(const Mesh& src, const RayScene& scene, const Reference
   const Eigen::Index m = std::min<Eigen::Index>(n, static_cast<Eigen::Index>(o.noise_points));
   if (m > 0) {
     to.seed = o.seed + 2;
-    RowMatrixXd again = shadowed_transfer(scene, ref.points.topRows(m), ref.normals.topRows(m), to);
+    RowMatrixXd again = shadowed_transfer(scene, ref.points.topRows(m), ref.normals.topRows(m), to).replicate(1, channels);
     po.seed = o.seed + 4;
     if (o.bounces > 0) again += path_traced_transfer(scene, surface, ref.points.topRows(m), ref.normals.topRows(m), po);
     const double diff = (again - ref.transfer.topRows(m)).rowwise().squaredNorm().mean();
-    ref.noise_floor = std::sqrt(diff / 2) / unshadowed_norm(o.order);  // one estimate's RMS error
+    ref.noise_floor = std::sqrt(diff / 2 / channels) / unshadowed_norm(o.order);  // one estimate's RMS error (over channels)
   }
   return ref;
 }
 
 namespace {
 
-// ‖g(p) − t_ref(p)‖ over the first K coefficients: the asset's transfer interpolated in face t
-// with weights w, against reference row i.
+// Which columns eval compares: per channel the first K coefficients both hold (a reference of
+// another order compares the bands both have), and the unit.
+struct Compared {
+  int channels = 1;
+  Eigen::Index K = 0, asset_stride = 0, reference_stride = 0;
+  double unit = 1;
+};
+
+Compared compared_columns(const RowMatrixXd& transfer, const RowMatrixXd& reference) {
+  const int ca = std::max(transfer_channels(transfer.cols()), 1), cr = std::max(transfer_channels(reference.cols()), 1);
+  if (ca != cr)
+    throw InputError(std::string("eval: the asset's transfer is ") + (ca == 3 ? "RGB" : "grey") + " and the reference's " + (cr == 3 ? "RGB" : "grey") +
+                     " (judge a coloured bounce against a coloured reference)");
+  Compared c;
+  c.channels = ca, c.asset_stride = transfer.cols() / ca, c.reference_stride = reference.cols() / cr;
+  c.K = std::min(c.asset_stride, c.reference_stride);
+  c.unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(static_cast<double>(c.K)))));
+  return c;
+}
+
+// ‖g(p) − t_ref(p)‖ over the compared coefficients (RMS over channels): the asset's transfer
+// interpolated in face t with weights w, against reference row i.
 double interpolation_error(const RowMatrixXd& transfer, const Triangle& t, const Eigen::Vector3d& w, const RowMatrixXd& reference,
-                           Eigen::Index i, int K) {
+                           Eigen::Index i, const Compared& c) {
   double e2 = 0;
-  for (int k = 0; k < K; ++k) {
-    const double g = w[0] * transfer(t[0], k) + w[1] * transfer(t[1], k) + w[2] * transfer(t[2], k);
-    const double d = g - reference(i, k);
-    e2 += d * d;
-  }
-  return std::sqrt(e2);
+  for (int ch = 0; ch < c.channels; ++ch)
+    for (Eigen::Index k = 0; k < c.K; ++k) {
+      const Eigen::Index a = ch * c.asset_stride + k;
+      const double g = w[0] * transfer(t[0], a) + w[1] * transfer(t[1], a) + w[2] * transfer(t[2], a);
+      const double d = g - reference(i, ch * c.reference_stride + k);
+      e2 += d * d;
+    }
+  return std::sqrt(e2 / c.channels);
 }
 
 // RMS and 95th percentile of the points' errors (relative), in percent.
@@ -121,10 +145,10 @@ void summarize(std::vector<double>& err, EvalResult& r) {
 
 EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
                     const std::vector<uint32_t>& source_face, const RowMatrixXd& transfer) {
-  const int K = static_cast<int>(std::min<Eigen::Index>(transfer.cols(), ref.transfer.cols()));
+  const Compared K = compared_columns(transfer, ref.transfer);
   std::unordered_map<uint32_t, std::vector<uint32_t>> faces_of;
   for (uint32_t f = 0; f < triangles.size(); ++f) faces_of[source_face[f]].push_back(f);
-  const double unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(K))));
+  const double unit = K.unit;
   EvalResult r;
   r.reference_rays = ref.rays;
   r.noise_floor_percent = 100 * ref.noise_floor;
@@ -169,8 +193,8 @@ EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const s
 
 EvalResult evaluate_by_closest_point(const Reference& ref, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
                                      const RowMatrixXd& transfer, int threads) {
-  const int K = static_cast<int>(std::min<Eigen::Index>(transfer.cols(), ref.transfer.cols()));
-  const double unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(K))));
+  const Compared K = compared_columns(transfer, ref.transfer);
+  const double unit = K.unit;
   Mesh m;  // the asset's faces as a mesh whose render vertices are its positions
   m.positions = positions;
   m.vertex_position.resize(static_cast<size_t>(positions.rows()));

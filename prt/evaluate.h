@@ -1,6 +1,7 @@
 // Surface RMS transfer error of an asset against a high-ray reference on its source surface.
 #pragma once
 
+#include "prtsub/prt/albedo.h"
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/transfer.h"
 
@@ -17,6 +18,10 @@ struct ReferenceOptions {
   //! bounces, traced as paths through the source (path_transfer.h), never taken from the asset.
   int bounces = 0;
   double albedo = 0.8;
+  //! A coloured albedo over the source (overrides `albedo`): the reference is RGB, #N by 3·N²,
+  //! its bounces carried by each channel's albedo, to judge an RGB asset (docs/sh_convention.md,
+  //! "Colour")
+  std::shared_ptr<const AlbedoField> colour;
   int paths = 0;  //!< paths per point for the bounced light; 0: `rays`
 };
 
@@ -49,7 +54,9 @@ double unshadowed_norm(int order);
 
 //! Interpolates the asset's transfer at each reference point, found among the asset's faces
 //! with the point's source_face (the one containing it, or the nearest). Error per point is
-//! ‖g(p) − t_ref(p)‖ / ‖t_unshadowed‖; RMS and 95th percentile over points, in percent.
+//! ‖g(p) − t_ref(p)‖ / ‖t_unshadowed‖; RMS and 95th percentile over points, in percent. RGB
+//! transfer against an RGB reference: the RMS over the three channels of that error.
+//! \throw InputError when one is RGB and the other is not
 EvalResult evaluate(const Reference& reference, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
                     const std::vector<uint32_t>& source_face, const RowMatrixXd& transfer);
 //! The same for an asset whose faces do not lie in the source's (a simplified one): each

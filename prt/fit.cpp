@@ -943,7 +943,9 @@ double weigh_by_noise(const Mesh& mesh, const std::vector<double>& var_f, const 
 // Interpolation across a triangle mixes vertex functions convexly, so both bounds hold there.
 size_t keep_non_negative(const RowMatrixXd& prior, RowMatrixXd& x, NonNegative mode, int threads) {
   if (mode == NonNegative::Off) return 0;
-  const Eigen::Index K = x.cols();
+  // RGB transfer (three blocks of N², docs/sh_convention.md "Colour"): every channel's bound.
+  const int channels = std::max(transfer_channels(x.cols()), 1);
+  const Eigen::Index K = x.cols() / channels;
   const int order = static_cast<int>(std::lround(std::sqrt(double(K))));
   constexpr int kDirections = 128;
   RowMatrixXd Y(kDirections, K);  // SH at a Fibonacci sphere
@@ -956,14 +958,17 @@ size_t keep_non_negative(const RowMatrixXd& prior, RowMatrixXd& x, NonNegative m
   parallel_range(x.rows(), threads, Eigen::Index(256), [&](const tbb::blocked_range<Eigen::Index>& range) {
     for (Eigen::Index i = range.begin(); i < range.end(); ++i) {
       if (directions) {
-        const Eigen::VectorXd tp = Y * prior.row(i).transpose(), tx = Y * x.row(i).transpose();
-        const double floor = std::min(0.0, tp.minCoeff());
         double share = 1;
-        for (int d = 0; d < kDirections; ++d)
-          if (tx[d] < floor && tp[d] > tx[d]) share = std::min(share, (tp[d] - floor) / (tp[d] - tx[d]));
+        for (int c = 0; c < channels; ++c) {
+          const Eigen::VectorXd tp = Y * prior.row(i).segment(c * K, K).transpose(), tx = Y * x.row(i).segment(c * K, K).transpose();
+          const double floor = std::min(0.0, tp.minCoeff());
+          for (int d = 0; d < kDirections; ++d)
+            if (tx[d] < floor && tp[d] > tx[d]) share = std::min(share, (tp[d] - floor) / (tp[d] - tx[d]));
+        }
         if (share < 1) x.row(i) = prior.row(i) + std::max(share, 0.0) * (x.row(i) - prior.row(i)), limited[size_t(i)] = 1;
       }
-      if (x(i, 0) < 0) x(i, 0) = 0, limited[size_t(i)] = 1;
+      for (int c = 0; c < channels; ++c)
+        if (x(i, c * K) < 0) x(i, c * K) = 0, limited[size_t(i)] = 1;
     }
   });
   return static_cast<size_t>(std::count(limited.begin(), limited.end(), 1));

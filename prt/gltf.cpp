@@ -106,20 +106,23 @@ Eigen::Matrix3d z_up_to_y_up() {
 }
 
 std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
-                             const Metadata& metadata, AssetSignal signal, const GltfOptions& options) {
-  check_asset_input(path, mesh, transfer_in, signal);
+                             const Metadata& metadata, AssetSignal signal, const GltfOptions& options, const RowMatrixX3d& albedo) {
+  check_asset_input(path, mesh, transfer_in, signal, albedo);
   const bool ao = signal == AssetSignal::Ao;
   const size_t V = mesh.num_vertices(), F = mesh.num_faces();
   const Eigen::Index K = transfer_in.cols();
-  const int order = ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(K))));
-  if (!ao && order * order != K) throw InputError(path + ": " + std::to_string(K) + " transfer coefficients is not N² for an SH order N");
+  const int channels = ao ? 1 : transfer_channels(K);
+  const Eigen::Index per_channel = K / channels;
+  const int order = ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(per_channel))));
 
   // The file's axes: a Z-up source turns so its +Z is glTF's +Y, the transfer with it.
   const Eigen::Matrix3d R = options.up == UpAxis::Z ? z_up_to_y_up() : Eigen::Matrix3d::Identity();
   RowMatrixX3d positions = vertex_positions(mesh) * R.transpose();
   RowMatrixX3d normals = mesh.normals * R.transpose();
   RowMatrixXd transfer = transfer_in;
-  if (!ao && options.up != UpAxis::Y) transfer = transfer_in * sh_rotation(order, R).transpose();
+  if (!ao && options.up != UpAxis::Y)
+    for (int c = 0; c < channels; ++c)
+      transfer.middleCols(c * per_channel, per_channel) = transfer_in.middleCols(c * per_channel, per_channel) * sh_rotation(order, R).transpose();
   for (Eigen::Index v = 0; v < normals.rows(); ++v) {
     const double n = normals.row(v).norm();
     if (n > 0) normals.row(v) /= n;
@@ -175,21 +178,31 @@ std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const Ro
       quantization = {{"component_type", "SHORT"}, {"normalized", true}, {"scale", scale},
                       {"decode", "t_i = scale_i * max(q / 32767, -1)"}};
     }
-    for (Eigen::Index k = 0; k * 4 < K; ++k) {
-      View view{{}, V, options.quantize ? 8 : 16, kArrayBuffer, false};
-      for (size_t v = 0; v < V; ++v)
-        for (Eigen::Index c = 4 * k; c < 4 * k + 4; ++c) {
-          const double t = c < K ? transfer(static_cast<Eigen::Index>(v), c) : 0.0;
-          if (options.quantize) {
-            const double q = std::round(t / scale[static_cast<size_t>(c < K ? c : 0)] * 32767);
-            put(view.bytes, static_cast<int16_t>(std::clamp(c < K ? q : 0.0, -32767.0, 32767.0)));
-          } else {
-            put(view.bytes, static_cast<float>(t));
+    // Grey: _PRT_k. RGB: _PRT_R_k, _PRT_G_k, _PRT_B_k, each channel zero-padded on its own.
+    for (int ch = 0; ch < channels; ++ch) {
+      const Eigen::Index first = ch * per_channel, end = first + per_channel;
+      for (Eigen::Index k = 0; k * 4 < per_channel; ++k) {
+        View view{{}, V, options.quantize ? 8 : 16, kArrayBuffer, false};
+        for (size_t v = 0; v < V; ++v)
+          for (Eigen::Index c = first + 4 * k; c < first + 4 * k + 4; ++c) {
+            const double t = c < end ? transfer(static_cast<Eigen::Index>(v), c) : 0.0;
+            if (options.quantize) {
+              const double q = std::round(t / scale[static_cast<size_t>(c < end ? c : 0)] * 32767);
+              put(view.bytes, static_cast<int16_t>(std::clamp(c < end ? q : 0.0, -32767.0, 32767.0)));
+            } else {
+              put(view.bytes, static_cast<float>(t));
+            }
           }
-        }
-      const std::string name = "_PRT_" + std::to_string(k);
-      attributes[name] = w.add(std::move(view), options.quantize ? kShort : kFloat, "VEC4", options.quantize);
-      value_names.push_back(name);
+        const std::string name = std::string("_PRT_") + (channels == 1 ? "" : std::string(1, "RGB"[ch]) + "_") + std::to_string(k);
+        attributes[name] = w.add(std::move(view), options.quantize ? kShort : kFloat, "VEC4", options.quantize);
+        value_names.push_back(name);
+      }
+    }
+    if (albedo.rows() > 0) {  // glTF's COLOR_0 is linear, as the albedo is
+      View colour{{}, V, 12, kArrayBuffer, false};
+      for (size_t v = 0; v < V; ++v)
+        for (int c = 0; c < 3; ++c) put(colour.bytes, static_cast<float>(albedo(static_cast<Eigen::Index>(v), c)));
+      attributes["COLOR_0"] = w.add(std::move(colour), kFloat, "VEC3", false);
     }
   }
   View index{{}, 3 * F, 4, kElementArrayBuffer, true}, source{{}, F, 4, 0, false};
@@ -222,11 +235,15 @@ std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const Ro
     extras["ao"] = "ao=(1/pi)*integral(V*max(n.w,0)) in [0,1] (1 unoccluded) radiance=albedo*ambient*ao; COLOR_0 = (ao, ao, ao, 1)";
   } else {
     extras["sh_order"] = order;
-    extras["sh_coefficients"] = K;
+    extras["sh_coefficients"] = per_channel;
+    extras["channels"] = channels;
     extras["sh_basis"] = "real-orthonormal index=l*(l+1)+m no-condon-shortley y1-1=+c*y y10=+c*z y11=+c*x";
     extras["sh_axes"] = "the file's (glTF: +Y up, right-handed)";
     extras["transfer"] = "t_i=integral(V*max(n.w,0)*y_i); excludes albedo/pi: radiance=albedo/pi*sum(l_i*t_i)";
-    extras["transfer_layout"] = "_PRT_k holds t_{4k}..t_{4k+3}; the last is zero-padded";
+    extras["transfer_layout"] = channels == 1 ? "_PRT_k holds t_{4k}..t_{4k+3}; the last is zero-padded"
+                                              : "_PRT_R_k, _PRT_G_k, _PRT_B_k hold channel c's t_{4k}..t_{4k+3}; each channel's last is zero-padded";
+    if (channels == 3) extras["channel_rule"] = "radiance_c=albedo_c/pi*sum(l_c,i*t_c,i): each channel's transfer bounced by that channel's albedo";
+    if (albedo.rows() > 0) extras["albedo"] = "COLOR_0: the surface's own linear albedo at the vertex (not folded into t)";
     if (!quantization.is_null()) extras["quantization"] = quantization;
   }
 
@@ -306,8 +323,8 @@ std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const Ro
 }
 
 void write_gltf_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
-                      const Metadata& metadata, AssetSignal signal, const GltfOptions& options) {
-  write_file_atomically(path, gltf_asset_bytes(path, mesh, transfer, metadata, signal, options));
+                      const Metadata& metadata, AssetSignal signal, const GltfOptions& options, const RowMatrixX3d& albedo) {
+  write_file_atomically(path, gltf_asset_bytes(path, mesh, transfer, metadata, signal, options, albedo));
 }
 
 // ---- reading ----
@@ -571,7 +588,11 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
     const json& o = r.member(extras, "sh_order", "meshes[0].extras");
     const int order = o.is_number_integer() ? o.get<int>() : 0;
     if (order < 1 || order > kMaxShOrder) r.fail("extras.sh_order " + o.dump() + " is not an order of 1 to 10");
-    const int K = order * order;
+    const int per_channel = order * order;
+    const json ch = extras.value("channels", json(1));
+    const int channels = ch.is_number_integer() ? ch.get<int>() : 0;
+    if (channels != 1 && channels != 3) r.fail("extras.channels " + ch.dump() + " is neither 1 nor 3");
+    const int K = channels * per_channel;
     std::vector<double> scale(static_cast<size_t>(K), 1.0);
     if (extras.contains("quantization")) {
       const json& s = r.member(extras["quantization"], "scale", "extras.quantization");
@@ -581,15 +602,23 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
         scale[static_cast<size_t>(c)] = s[static_cast<size_t>(c)].get<double>();
       }
     }
-    a.order = order;
+    a.order = order, a.channels = channels;
     a.transfer.resize(Vi, K);
-    for (int k = 0; 4 * k < K; ++k) {
-      const std::string name = "_PRT_" + std::to_string(k);
-      const std::vector<double> t = r.accessor(attribute(name.c_str()), "VEC4", 4, {kFloat, kShort}, n);
-      if (n != V) r.fail(name + " has " + std::to_string(n) + " values for " + std::to_string(V) + " vertices");
-      for (Eigen::Index i = 0; i < Vi; ++i)
-        for (int c = 4 * k; c < std::min(K, 4 * k + 4); ++c)
-          a.transfer(i, c) = scale[static_cast<size_t>(c)] * t[static_cast<size_t>(i) * 4 + static_cast<size_t>(c - 4 * k)];
+    for (int chn = 0; chn < channels; ++chn)
+      for (int k = 0; 4 * k < per_channel; ++k) {
+        const std::string name = std::string("_PRT_") + (channels == 1 ? "" : std::string(1, "RGB"[chn]) + "_") + std::to_string(k);
+        const std::vector<double> t = r.accessor(attribute(name.c_str()), "VEC4", 4, {kFloat, kShort}, n);
+        if (n != V) r.fail(name + " has " + std::to_string(n) + " values for " + std::to_string(V) + " vertices");
+        const int first = chn * per_channel;
+        for (Eigen::Index i = 0; i < Vi; ++i)
+          for (int c = first + 4 * k; c < std::min(first + per_channel, first + 4 * k + 4); ++c)
+            a.transfer(i, c) = scale[static_cast<size_t>(c)] * t[static_cast<size_t>(i) * 4 + static_cast<size_t>(c - first - 4 * k)];
+      }
+    if (attr.contains("COLOR_0")) {
+      const std::vector<double> rgb = r.accessor(attribute("COLOR_0"), "VEC3", 3, {kFloat}, n);
+      if (n != V) r.fail("COLOR_0 has " + std::to_string(n) + " values for " + std::to_string(V) + " vertices");
+      a.albedo = Eigen::Map<const RowMatrixX3d>(rgb.data(), Vi, 3);
+      if (!(a.albedo.allFinite() && a.albedo.minCoeff() >= 0 && a.albedo.maxCoeff() <= 1)) r.fail("COLOR_0 holds an albedo outside [0, 1]");
     }
   } else {
     r.fail("extras.signal '" + signal + "' is neither transfer nor ao");
@@ -637,7 +666,11 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
     if (!R.isIdentity(1e-12)) {
       a.positions = a.positions * R;  // rows: p_source = Rᵀ p_file
       a.normals = a.normals * R;
-      if (a.signal == AssetSignal::Transfer) a.transfer = a.transfer * sh_rotation(a.order, R.transpose()).transpose();
+      if (a.signal == AssetSignal::Transfer) {
+        const Eigen::Index k = a.transfer.cols() / a.channels;
+        for (int c = 0; c < a.channels; ++c)
+          a.transfer.middleCols(c * k, k) = (a.transfer.middleCols(c * k, k) * sh_rotation(a.order, R.transpose()).transpose()).eval();
+      }
     }
   }
   return a;

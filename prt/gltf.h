@@ -30,12 +30,14 @@ Eigen::Matrix3d z_up_to_y_up();
 //! The file's bytes: a GLB for a `path` ending in .glb, else glTF JSON with the buffer in a
 //! data: URI. Arguments as write_asset's. \throw InputError as write_asset
 std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
-                             const Metadata& metadata, AssetSignal signal, const GltfOptions& options);
+                             const Metadata& metadata, AssetSignal signal, const GltfOptions& options,
+                             const RowMatrixX3d& albedo = RowMatrixX3d());
 
 //! Writes the asset through a temporary file renamed into place, like write_asset.
 //! \throw InputError as write_asset, IoError if writing fails
 void write_gltf_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,
-                      const Metadata& metadata, AssetSignal signal, const GltfOptions& options = {});
+                      const Metadata& metadata, AssetSignal signal, const GltfOptions& options = {},
+                      const RowMatrixX3d& albedo = RowMatrixX3d());
 
 //! Reads a glTF asset prtsub wrote (GLB, or JSON with data: URIs), compressed or not, and
 //! returns it in its source's axes (the recorded up rotation undone), as read_asset returns a

@@ -15,6 +15,7 @@
 #include <cstdio>
 
 #include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 namespace {
@@ -26,8 +27,6 @@ std::string extension(const std::string& path) {
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
-
-double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 
 }  // namespace
 
@@ -54,6 +53,13 @@ Image read_image(const std::string& path) {
       if (img.channels < 4 || i % 4 != 3) img.pixels[i] = static_cast<float>(srgb_to_linear(img.pixels[i]));
   }
   return img;
+}
+
+AlbedoSpec read_albedo_map(const std::string& path) {
+  AlbedoSpec s;
+  s.source = AlbedoSource::Map, s.map = path;
+  s.image = std::make_shared<const Image>(read_image(path));
+  return s;
 }
 
 std::string encode_image(const std::string& path, const Image& img, const ImageWriteOptions& options) {

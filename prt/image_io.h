@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "prtsub/prt/albedo.h"
 #include "prtsub/prt/lights.h"
 
 namespace prtsub {
@@ -25,6 +26,10 @@ void write_image(const std::string& path, const Image& image, const ImageWriteOp
 //! The file write_image would write, in memory (the format from path's extension).
 //! \throw IoError, InputError for an unknown extension
 std::string encode_image(const std::string& path, const Image& image, const ImageWriteOptions& options = {});
+
+//! An albedo from a diffuse texture: read_image's pixels (8-bit sRGB decoded, float linear)
+//! behind spec.image, for AlbedoField. \throw IoError, InputError as read_image
+AlbedoSpec read_albedo_map(const std::string& path);
 
 //! The sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
 double linear_to_srgb(double v);

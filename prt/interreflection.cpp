@@ -116,17 +116,33 @@ std::vector<Eigen::Vector3d> face_normals(const Mesh& mesh) {
   return face_normal;
 }
 
-// (albedo/R) Σ over the hits of `values` interpolated in the hit triangle.
-void gather(const Mesh& mesh, const RowMatrixXd& values, const Hit* hits, uint32_t R, double albedo, Eigen::RowVectorXd& sum) {
+// (albedo/R) Σ over the hits of `values` interpolated in the hit triangle; with a coloured
+// albedo, each channel's block times that channel's albedo at the hit.
+void gather(const Mesh& mesh, const RowMatrixXd& values, const Hit* hits, uint32_t R, const BounceOptions& o, Eigen::RowVectorXd& sum) {
   sum.setZero();
+  const Eigen::Index K = values.cols() / 3;
   for (uint32_t k = 0; k < R; ++k) {
     const Hit& h = hits[k];
     if (h.face < 0) continue;
     const Triangle& t = mesh.triangles[static_cast<size_t>(h.face)];
     const double w1 = h.u, w2 = h.v, w0 = 1.0 - w1 - w2;
-    sum += w0 * values.row(t[0]) + w1 * values.row(t[1]) + w2 * values.row(t[2]);
+    if (!o.colour) {
+      sum += w0 * values.row(t[0]) + w1 * values.row(t[1]) + w2 * values.row(t[2]);
+      continue;
+    }
+    const Eigen::Vector3d rho = o.colour->at(static_cast<uint32_t>(h.face), w1, w2);
+    for (int c = 0; c < 3; ++c)
+      sum.segment(c * K, K) +=
+          rho[c] * (w0 * values.row(t[0]).segment(c * K, K) + w1 * values.row(t[1]).segment(c * K, K) + w2 * values.row(t[2]).segment(c * K, K));
   }
-  sum *= albedo / R;
+  sum *= (o.colour ? 1.0 : o.albedo) / R;
+}
+
+void check_colour(const Mesh& mesh, const RowMatrixXd& values, const BounceOptions& o, const char* what) {
+  if (!o.colour) return;
+  if (static_cast<size_t>(o.colour->vertices().rows()) != mesh.num_vertices())
+    throw InputError(std::string(what) + ": the albedo is for another mesh");
+  if (values.cols() % 3 != 0) throw InputError(std::string(what) + ": RGB values need three blocks of coefficients");
 }
 
 void check_bounce_options(const BounceOptions& o) {
@@ -144,7 +160,9 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
   if (static_cast<size_t>(direct.rows()) != V) throw InputError("interreflection: the direct transfer has the wrong number of rows");
   Stopwatch clock;
   BounceStats s;
-  RowMatrixXd total = direct;
+  // Colour: every channel starts from the same direct transfer and bounces by its own albedo.
+  RowMatrixXd total = o.colour ? RowMatrixXd(direct.replicate(1, 3)) : direct;
+  check_colour(mesh, total, o, "interreflection");
   if (before_last) *before_last = total;
   if (o.bounces == 0 || V == 0) {
     if (stats) *stats = s;
@@ -171,8 +189,9 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
   double area_total = 0;
   for (double a : area) area_total += a;
   const double unit = unshadowed_norm(static_cast<int>(std::lround(std::sqrt(static_cast<double>(direct.cols())))));
-  const Eigen::Index K = direct.cols();
-  RowMatrixXd previous = direct, next(direct.rows(), K);
+  const Eigen::Index K = total.cols();
+  const double channels = o.colour ? 3 : 1;  // the change is the RMS over channels
+  RowMatrixXd previous = total, next(direct.rows(), K);
   const int max_passes = o.until_converged ? std::max(o.bounces, 1) : o.bounces;
   for (int pass = 1; pass <= max_passes; ++pass) {
     parallel_range<size_t>(V, o.threads, 16, [&](const tbb::blocked_range<size_t>& range) {
@@ -181,7 +200,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
       for (size_t i = range.begin(); i != range.end(); ++i) {
         const Hit* hits = s.cached ? &cache[i * R] : own.data();
         if (!s.cached) trace_vertex(mesh, scene, offsets, face_normal, generators, R, o.seed, static_cast<uint32_t>(i), own.data());
-        gather(mesh, previous, hits, R, o.albedo, sum);
+        gather(mesh, previous, hits, R, o, sum);
         next.row(static_cast<Eigen::Index>(i)) = sum;
       }
     });
@@ -190,7 +209,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
     total += next;
     double change2 = 0;
     for (size_t i = 0; i < V; ++i) change2 += area[i] * next.row(static_cast<Eigen::Index>(i)).squaredNorm();
-    s.change_percent.push_back(100 * std::sqrt(change2 / std::max(area_total, 1e-300)) / unit);
+    s.change_percent.push_back(100 * std::sqrt(change2 / channels / std::max(area_total, 1e-300)) / unit);
     s.passes = pass;
     std::swap(previous, next);
     if (o.until_converged && s.change_percent.back() < o.noise_percent) break;
@@ -206,6 +225,7 @@ RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatr
   check_bounce_options(o);
   if (static_cast<size_t>(values.rows()) != mesh.num_vertices()) throw InputError("gather: the values have the wrong number of rows");
   if (points.rows() != normals.rows() || points.rows() != offsets.rows()) throw InputError("gather: points, normals and offsets differ in count");
+  check_colour(mesh, values, o, "gather");
   const Stopwatch clock;
   const auto R = static_cast<uint32_t>(o.rays);
   const std::vector<uint32_t> generators = doubling_generators(R, 0);
@@ -221,7 +241,7 @@ RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatr
                  static_cast<uint64_t>(i), rays, dirs);
       intersect(scene, rays);
       classify(rays, dirs, face_normal, hits.data());
-      gather(mesh, values, hits.data(), R, o.albedo, sum);
+      gather(mesh, values, hits.data(), R, o, sum);
       out.row(i) = sum;
     }
   });

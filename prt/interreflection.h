@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "prtsub/prt/albedo.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/transfer.h"
 #include "prtsub/subdiv/mesh.h"
@@ -23,6 +24,9 @@ struct BounceOptions {
   bool until_converged = false;
   double noise_percent = 0;
   double albedo = 0.8;  //!< the diffuse albedo of every surface, in [0, 1]
+  //! A coloured albedo over the mesh the passes run on (it overrides `albedo`): the transfer is
+  //! then RGB, #V by 3·N², the channels' blocks side by side, each bounced by its own channel
+  std::shared_ptr<const AlbedoField> colour;
   int rays = 256;       //!< rays per vertex and pass
   uint64_t seed = 0;
   int threads = 0;
@@ -54,7 +58,8 @@ struct BounceStats {
 //! a back face is taken as black. R cosine-weighted directions per vertex (a shifted lattice,
 //! seeded per vertex, the same every pass) estimate the integral as (albedo/R) Σ_hits t_{k−1}(h).
 //! The result does not depend on the thread count or on the cache.
-//! \param direct #V by N², the vertices' direct transfer (the asset's values)
+//! \param direct #V by N², the vertices' direct transfer (the asset's values); with
+//!        `options.colour`, the result is #V by 3·N² (docs/sh_convention.md, "Colour")
 //! \throw InputError for options out of range, EmbreeError
 //! \param before_last if given, receives the transfer before the last pass (the direct transfer
 //!        plus passes 1..N−1): what the last pass bounced, which gather_bounce bounces once more
@@ -66,7 +71,8 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
 //! (albedo/R) Σ over R cosine-weighted rays of `values` interpolated in the front face each hits,
 //! as a pass of interreflected_transfer does at a vertex (point i's rays are its own stream of
 //! options.seed). The same for any thread count.
-//! \param values #V by K on `mesh`'s render vertices, whose triangles `scene` holds in order
+//! \param values #V by K on `mesh`'s render vertices, whose triangles `scene` holds in order;
+//!        with `options.colour`, K = 3·N², the three channels' blocks
 //! \param offsets #P by 3 unit directions the rays leave along (the samples' own)
 //! \throw InputError for options out of range, EmbreeError
 RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& values, const RowMatrixX3d& points,

@@ -44,17 +44,19 @@ struct Tracer {
   const RayScene& scene;
   const PathSurface& s;
   const std::vector<Eigen::Vector3d>& face_normal;  // unit, by winding
+  const PathOptions& o;
   uint64_t rays = 0;
 
   // A surface point the paths stand on.
   struct Point {
     Eigen::Vector3d n;     // shading normal
     Eigen::Vector3f from;  // ray origin, local
+    Eigen::Vector3d rho;   // its albedo, per channel
   };
 
   Point start(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
     const Eigen::Vector3f local = scene.to_local(p);
-    return {n, local + scene.ray_offset(local) * n.cast<float>()};
+    return {n, local + scene.ray_offset(local) * n.cast<float>(), Eigen::Vector3d::Zero()};
   }
 
   // Direction ω around n, cosine-distributed.
@@ -88,6 +90,7 @@ struct Tracer {
     const Eigen::Vector3f local = scene.to_local(p);
     next.n = n;
     next.from = local + scene.ray_offset(local) * g.cast<float>();
+    next.rho = o.colour ? o.colour->at(f, w1, w2) : Eigen::Vector3d::Constant(o.albedo);
     return 1;
   }
 };
@@ -115,15 +118,19 @@ RowMatrixXd path_traced_transfer(const RayScene& scene, const PathSurface& surfa
     face_normal[f] = g.norm() > 0 ? Eigen::Vector3d(g.normalized()) : Eigen::Vector3d::Zero();
   }
   const int K = sh_count(o.order);
+  const int C = o.colour ? 3 : 1;  // channels: each carries its own albedo along the path
   const Eigen::Index P = points.rows();
-  RowMatrixXd out = RowMatrixXd::Zero(P, K);
+  RowMatrixXd out = RowMatrixXd::Zero(P, C * K);
   if (variance) variance->assign(static_cast<size_t>(P), 0.0);
   std::atomic<uint64_t> rays{0};
   parallel_range<Eigen::Index>(P, o.threads, 4, [&](const tbb::blocked_range<Eigen::Index>& range) {
-    Tracer tr{scene, surface, face_normal};
-    Eigen::VectorXd y(K), tu(K), value(K), sum(K), sum2(K);
+    Tracer tr{scene, surface, face_normal, o};
+    Eigen::VectorXd y(K), tu(K), value(C * K), sum(C * K), sum2(C * K);
+    auto add = [&](const Eigen::Vector3d& weight, double scale, const Eigen::VectorXd& v) {
+      for (int c = 0; c < C; ++c) value.segment(c * K, K) += (weight[c] * scale) * v;
+    };
     // value += weight · t̂_b(at): the two-ray direct estimate, then the path goes on (or not).
-    auto walk = [&](Tracer::Point at, int b, double weight, Rng& rng) {
+    auto walk = [&](Tracer::Point at, int b, Eigen::Vector3d weight, Rng& rng) {
       for (;;) {
         const Eigen::Vector3d wa = Tracer::direction(at.n, rng), wb = Tracer::direction(at.n, rng);
         Tracer::Point next{}, unused{};
@@ -132,16 +139,16 @@ RowMatrixXd path_traced_transfer(const RayScene& scene, const PathSurface& surfa
         if (va || vb) {
           unshadowed_transfer(o.order, at.n, tu.data());
           // Each ray's β is the other's visibility; (β t_u + π (V − β) y) / 2 per ray.
-          value += weight * 0.5 * (vb + va) * tu;
+          add(weight, 0.5 * (vb + va), tu);
           if (va != vb) {
             sh_eval(o.order, wa.x(), wa.y(), wa.z(), y.data());
-            value += weight * 0.5 * M_PI * (va - vb) * y;
+            add(weight, 0.5 * M_PI * (va - vb), y);
             sh_eval(o.order, wb.x(), wb.y(), wb.z(), y.data());
-            value += weight * 0.5 * M_PI * (vb - va) * y;
+            add(weight, 0.5 * M_PI * (vb - va), y);
           }
         }
         if (ha != 1 || b == 0) return;
-        at = next, weight *= o.albedo, --b;
+        weight = weight.cwiseProduct(next.rho), at = next, --b;
       }
     };
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
@@ -155,22 +162,22 @@ RowMatrixXd path_traced_transfer(const RayScene& scene, const PathSurface& surfa
         if (o.plain) {
           // t̂_b(at) = π y(ω) if ω escapes, ρ t̂_{b−1}(h) on a front face, else 0.
           Tracer::Point at = p;
-          double weight = 1;
+          Eigen::Vector3d weight = Eigen::Vector3d::Ones();
           for (int b = o.bounces;; --b) {
             const Eigen::Vector3d w = Tracer::direction(at.n, rng);
             Tracer::Point next{};
             const int h = tr.trace(at, w, next);
             if (h == 0) {
               sh_eval(o.order, w.x(), w.y(), w.z(), y.data());
-              value += weight * M_PI * y;
+              add(weight, M_PI, y);
             }
             if (h != 1 || b == 0) break;
-            at = next, weight *= o.albedo;
+            weight = weight.cwiseProduct(next.rho), at = next;
           }
         } else if (o.bounces > 0) {
           const Eigen::Vector3d w = Tracer::direction(n, rng);
           Tracer::Point h{};
-          if (tr.trace(p, w, h) == 1) walk(h, o.bounces - 1, o.albedo, rng);
+          if (tr.trace(p, w, h) == 1) walk(h, o.bounces - 1, h.rho, rng);
         }
         sum += value;
         sum2 += value.cwiseProduct(value);

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "prtsub/prt/albedo.h"
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/prt/transfer.h"
 
@@ -15,6 +16,9 @@ struct PathOptions {
   int paths = 2048;  //!< per point
   int bounces = 1;   //!< bounces of light each path may take, 1..64
   double albedo = 0.8;
+  //! A coloured albedo over the surface (overrides `albedo`): the result is then RGB, #P by 3·N²,
+  //! each channel's block carried by that channel's albedo at every hit
+  std::shared_ptr<const AlbedoField> colour;
   uint64_t seed = 0;  //!< the result is a function of (seed, point index), not of threads
   int threads = 0;
   //! false: only the bounced light (add shadowed_transfer's direct transfer for the total), with
@@ -36,7 +40,7 @@ struct PathSurface {
 //! of the surface p sees, back faces black. With `plain`, the whole t_B(p) instead.
 //! \param variance if given, receives #P estimates of each result's variance (summed over its
 //!        N² values): the paths are independent, so their spread over the count
-//! \return #P by N²
+//! \return #P by N² (by 3·N² with `options.colour`)
 //! \throw InputError for options out of range, EmbreeError
 RowMatrixXd path_traced_transfer(const RayScene& scene, const PathSurface& surface, const RowMatrixX3d& points,
                                  const RowMatrixX3d& point_normals, const PathOptions& options, std::vector<double>* variance = nullptr,

@@ -17,6 +17,7 @@
 
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/path_transfer.h"
+#include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
@@ -92,8 +93,20 @@ SurfaceHits trace_primary(const RayScene& scene, const Camera& cam, int W, int H
 }
 
 RowMatrixX3d vertex_radiance(const RowMatrixXd& transfer, const ShLight& light, double albedo) {
-  const Eigen::Index K = std::min<Eigen::Index>(transfer.cols(), light.coeffs.rows());
-  return (albedo / M_PI) * (transfer.leftCols(K) * light.coeffs.topRows(K));
+  if (transfer_channels(transfer.cols()) != 3) {
+    const Eigen::Index K = std::min<Eigen::Index>(transfer.cols(), light.coeffs.rows());
+    return (albedo / M_PI) * (transfer.leftCols(K) * light.coeffs.topRows(K));
+  }
+  const Eigen::Index stride = transfer.cols() / 3, K = std::min<Eigen::Index>(stride, light.coeffs.rows());
+  RowMatrixX3d out(transfer.rows(), 3);
+  for (int c = 0; c < 3; ++c) out.col(c) = (albedo / M_PI) * (transfer.middleCols(c * stride, K) * light.coeffs.col(c).head(K));
+  return out;
+}
+
+RowMatrixX3d vertex_radiance(const RowMatrixXd& transfer, const ShLight& light, const RowMatrixX3d& albedo) {
+  if (albedo.rows() != transfer.rows()) throw InputError("radiance: the albedo has " + std::to_string(albedo.rows()) + " rows for " +
+                                                         std::to_string(transfer.rows()) + " vertices");
+  return vertex_radiance(transfer, light, 1.0).cwiseProduct(albedo);
 }
 
 Image shade_gouraud(const SurfaceHits& hits, const std::vector<Triangle>& triangles, const RowMatrixX3d& radiance) {
@@ -155,18 +168,24 @@ void hit_points(const SurfaceHits& hits, const RowMatrixX3d& positions, const Ro
 Image render_reference(const RayScene& scene, const SurfaceHits& hits, const RowMatrixX3d& positions,
                        const RowMatrixX3d& normals, const std::vector<Triangle>& triangles, const ShLight& light,
                        double albedo, const TransferOptions& options, TransferStats* stats, const ProgressFn& progress,
-                       const PathOptions* bounced) {
+                       const PathOptions* bounced, const std::shared_ptr<const AlbedoField>& colour) {
   RowMatrixX3d points, point_normals;
   hit_points(hits, positions, normals, triangles, points, point_normals);
   RowMatrixXd t = shadowed_transfer(scene, points, point_normals, options, stats, progress);
   if (bounced && bounced->bounces > 0) {
     PathOptions p = *bounced;
     p.order = options.order;
+    if (colour) p.colour = colour, t = t.replicate(1, 3).eval();
     TransferStats path_stats;
     t += path_traced_transfer(scene, PathSurface{positions, normals, triangles}, points, point_normals, p, nullptr, &path_stats, progress);
     if (stats) stats->rays += path_stats.rays, stats->seconds += path_stats.seconds;
   }
-  RowMatrixX3d radiance = vertex_radiance(t, light, albedo);
+  RowMatrixX3d radiance = vertex_radiance(t, light, colour ? 1.0 : albedo);
+  if (colour) {  // each pixel's own albedo, at its point of the face
+    Eigen::Index k = 0;
+    for (size_t i = 0; i < hits.face.size(); ++i)
+      if (hits.face[i] >= 0) radiance.row(k) = radiance.row(k).cwiseProduct(colour->at(uint32_t(hits.face[i]), hits.u[i], hits.v[i]).transpose()), ++k;
+  }
   Image img;
   img.width = hits.width, img.height = hits.height, img.channels = 4;
   img.pixels.assign(static_cast<size_t>(img.width) * img.height * 4, 0.f);
@@ -225,7 +244,7 @@ ImageError image_error(const Image& a, const Image& b, Image* heat, double heat_
         for (int c = 0; c < 3; ++c) srgb[c] = stops[k][c] * (1 - f) + stops[k + 1][c] * f;
       }
       for (int c = 0; c < 3; ++c)  // store linear so the PNG encoder gives back these colours
-        heat->pixels[i * 3 + c] = static_cast<float>(srgb[c] <= 0.04045 ? srgb[c] / 12.92 : std::pow((srgb[c] + 0.055) / 1.055, 2.4));
+        heat->pixels[i * 3 + c] = static_cast<float>(srgb_to_linear(srgb[c]));
     }
   }
   return e;

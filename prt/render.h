@@ -40,9 +40,12 @@ struct SurfaceHits {
 
 SurfaceHits trace_primary(const RayScene& scene, const Camera& camera, int width, int height, int threads = 0);
 
-//! Exit radiance per vertex and channel, (albedo/π) Σ_i l_i t_i: #V by 3.
+//! Exit radiance per vertex and channel, (albedo/π) Σ_i l_i t_i: #V by 3. RGB transfer (#V by
+//! 3·N²) shades channel c with its own block: (albedo/π) Σ_i l_{c,i} t_{c,i}.
 //! \pre light.order == order of transfer (or lower: missing coefficients are 0)
 RowMatrixX3d vertex_radiance(const RowMatrixXd& transfer, const ShLight& light, double albedo);
+//! The same with each vertex's own albedo (#V by 3, an asset's albedo_r/g/b).
+RowMatrixX3d vertex_radiance(const RowMatrixXd& transfer, const ShLight& light, const RowMatrixX3d& albedo);
 
 //! Gouraud frame: radiance interpolated barycentrically from the hit face's vertices. RGBA,
 //! alpha 1 where a face was hit and 0 elsewhere.
@@ -60,11 +63,14 @@ void hit_points(const SurfaceHits& hits, const RowMatrixX3d& positions, const Ro
 
 //! The per-pixel reference: transfer computed at each hit point with `options`, then shaded.
 //! With `bounced` (bounces > 0), the light of that many bounces is added at each pixel, traced
-//! as paths through the same surface (path_transfer.h); its order is options.order.
+//! as paths through the same surface (path_transfer.h); its order is options.order. With
+//! `colour` (a field over these triangles), each pixel is shaded with the albedo at its own
+//! point, and the bounces carry it (bounced->colour is set to it).
 Image render_reference(const RayScene& scene, const SurfaceHits& hits, const RowMatrixX3d& positions,
                        const RowMatrixX3d& normals, const std::vector<Triangle>& triangles, const ShLight& light,
                        double albedo, const TransferOptions& options, TransferStats* stats = nullptr,
-                       const ProgressFn& progress = {}, const PathOptions* bounced = nullptr);
+                       const ProgressFn& progress = {}, const PathOptions* bounced = nullptr,
+                       const std::shared_ptr<const AlbedoField>& colour = nullptr);
 
 //! Error of image a against reference b over pixels covered in both (alpha > 0).
 struct ImageError {

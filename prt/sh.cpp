@@ -14,6 +14,16 @@
 #include <cmath>
 
 namespace prtsub {
+
+int transfer_channels(Eigen::Index cols) {
+  auto square = [](Eigen::Index k) {
+    const auto n = static_cast<Eigen::Index>(std::lround(std::sqrt(static_cast<double>(k))));
+    return k > 0 && n * n == k && n <= kMaxShOrder;
+  };
+  if (square(cols)) return 1;
+  if (cols % 3 == 0 && square(cols / 3)) return 3;
+  return 0;
+}
 namespace {
 
 struct Tables {

@@ -9,6 +9,10 @@
 
 namespace prtsub {
 
+//! Channels of a transfer matrix with `cols` columns: 1 for N², 3 for 3·N² (RGB transfer, the
+//! red, green and blue blocks side by side), else 0 (N from 1 to kMaxShOrder).
+int transfer_channels(Eigen::Index cols);
+
 constexpr int kMaxShOrder = 10;
 
 constexpr int sh_count(int order) { return order * order; }

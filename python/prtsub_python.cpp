@@ -49,7 +49,8 @@ py::array faces_view(const std::vector<Triangle>& t, py::handle owner) {
 // An asset in memory: what write_asset takes, plus what bake measured.
 struct PyAsset {
   Mesh mesh;
-  RowMatrixXd transfer;  // #V by N², order-1 transfer for AO
+  RowMatrixXd transfer;  // #V by N² (3·N² for RGB transfer), order-1 transfer for AO
+  RowMatrixX3d albedo;    // #V by 3 when the albedo is coloured, else no rows
   RowMatrixX3d vertices;  // render vertices' positions
   Eigen::VectorXd ao;     // AO assets: ao = t0 · kAoPerT0
   Metadata metadata;
@@ -129,11 +130,24 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "bounces") {
       if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.bounce.until_converged = true, o.bounce.bounces = 16;
       else o.bounce.bounces = value.cast<int>();
-    } else if (key == "albedo") o.bounce.albedo = value.cast<double>();
+    } else if (key == "albedo") {
+      // A number (grey), "vertex", "R,G,B", or three numbers.
+      const std::string text = py::isinstance<py::str>(value) ? value.cast<std::string>()
+                               : py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)
+                                   ? std::to_string(value.cast<double>())
+                                   : [&] {
+                                       const std::vector<double> c = value.cast<std::vector<double>>();
+                                       if (c.size() != 3) throw InputError("albedo: give a number, 'vertex', or three numbers R, G, B");
+                                       return std::to_string(c[0]) + "," + std::to_string(c[1]) + "," + std::to_string(c[2]);
+                                     }();
+      const AlbedoSpec a = parse_albedo(text);
+      if (a.coloured()) o.albedo_colour = a;
+      else o.bounce.albedo = a.constant.x();
+    } else if (key == "albedo_map") o.albedo_colour = read_albedo_map(value.cast<std::string>());
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, source)");
+                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");
@@ -149,6 +163,7 @@ PyAsset bake_mesh(const Mesh& mesh, const BakeOptions& options) {
   PyAsset a;
   a.mesh = std::move(r.mesh);
   a.transfer = std::move(r.transfer);
+  a.albedo = std::move(r.albedo);
   a.metadata = std::move(r.metadata);
   a.signal = options.signal;
   a.order = options.signal == AssetSignal::Ao ? 1 : r.order.order > 0 ? r.order.order : options.transfer.order;
@@ -256,7 +271,15 @@ PYBIND11_MODULE(prtsub, m) {
         PyAsset& a = self.cast<PyAsset&>();
         if (a.signal == AssetSignal::Ao) return py::none();
         return view(a.transfer.data(), a.transfer.rows(), a.transfer.cols(), self, true);
-      }, "SH transfer, (V, N²) float64, index l(l+1)+m (docs/sh_convention.md); writeable; None for AO assets")
+      }, "SH transfer, (V, N²) float64, index l(l+1)+m (docs/sh_convention.md); (V, 3·N²) for RGB transfer, the red, green and\n"
+         "blue blocks side by side; writeable; None for AO assets")
+      .def_property_readonly("albedo", [](py::object self) -> py::object {
+        PyAsset& a = self.cast<PyAsset&>();
+        if (a.albedo.rows() == 0) return py::none();
+        return view(a.albedo.data(), a.albedo.rows(), 3, self);
+      }, "the linear albedo at each vertex, (V, 3) float64, when it is coloured; None for a grey asset")
+      .def_property_readonly("channels", [](const PyAsset& a) { return a.signal == AssetSignal::Ao ? 1 : std::max(transfer_channels(a.transfer.cols()), 1); },
+                             "1, or 3 for RGB transfer (a coloured albedo that bounced)")
       .def_property_readonly("ao", [](py::object self) -> py::object {
         const PyAsset& a = self.cast<const PyAsset&>();
         if (a.signal != AssetSignal::Ao) return py::none();
@@ -291,13 +314,15 @@ PYBIND11_MODULE(prtsub, m) {
       "bake(vertices, faces, **options) or bake(mesh, **options): the whole pipeline, as `prtsub bake`.\n"
       "Options: order (N or 'auto'), max_order, order_tolerance, rays, seed, threads, signal ('transfer'|'ao'), fit ('point'|'average'|'lsq'), alpha,\n"
       "refine ('none'|'adaptive'|'uniform'), budget (below the input's count: simplify), levels, simplify_metric\n"
-      "('transfer'|'geometry'), min_angle, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo, source.");
+      "('transfer'|'geometry'), min_angle, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo (A, 'vertex', 'R,G,B' or\n"
+      "(R, G, B)), albedo_map (a diffuse texture through the UVs), source.");
 
   m.def("load", [](const std::string& path) {
         const Asset in = read_asset(path);
         PyAsset a;
         a.mesh = asset_mesh(in);
         a.transfer = in.transfer;
+        a.albedo = in.albedo;
         a.metadata = in.metadata;
         a.signal = in.signal;
         a.order = in.order;
@@ -308,9 +333,9 @@ PYBIND11_MODULE(prtsub, m) {
   m.def("save", [](const PyAsset& a, const std::string& path, bool quantize, bool compress, const std::string& up) {
         GltfOptions g;
         g.quantize = quantize, g.compress = compress, g.up = parse_up_axis(up);
-        if (is_gltf_path(path)) write_gltf_asset(path, a.mesh, a.transfer, a.metadata, a.signal, g);
+        if (is_gltf_path(path)) write_gltf_asset(path, a.mesh, a.transfer, a.metadata, a.signal, g, a.albedo);
         else if (quantize || compress || g.up != UpAxis::Y) throw InputError(path + ": quantize, compress and up are for .glb and .gltf assets");
-        else write_asset(path, a.mesh, a.transfer, a.metadata, a.signal);
+        else write_asset(path, a.mesh, a.transfer, a.metadata, a.signal, a.albedo);
       }, py::arg("asset"), py::arg("path"), py::kw_only(), py::arg("quantize") = false, py::arg("compress") = false, py::arg("up") = "y",
       "Writes the asset: a PLY, or glTF 2.0 for a path ending in .glb or .gltf (docs/asset_format.md). Atomic: a failure leaves no file.");
 
@@ -355,7 +380,10 @@ PYBIND11_MODULE(prtsub, m) {
         return single([map](int order) { return environment_light(order, map); });
       }, py::arg("path"), "A lat-long environment map (EXR, HDR, PNG, ...), as `--light env:PATH`.");
 
-  m.def("render", [](const PyAsset& a, const PyLight& light, std::pair<int, int> size, py::object camera, double albedo, int threads) {
+  m.def("render", [](const PyAsset& a, const PyLight& light, std::pair<int, int> size, py::object camera, py::object albedo_arg, int threads) {
+        // None: the asset's own per-vertex albedo when it has one, else 0.8.
+        if (!albedo_arg.is_none() && a.albedo.rows() > 0) throw InputError("render: this asset stores its own albedo per vertex; albedo= is for grey assets");
+        const double albedo = albedo_arg.is_none() ? 0.8 : albedo_arg.cast<double>();
         const auto [width, height] = size;
         if (width < 1 || height < 1 || width > 16384 || height > 16384) throw InputError("size must be 1 to 16384 pixels a side");
         const Camera cam = camera_of(camera, bounds(a.vertices), width, height);
@@ -365,7 +393,8 @@ PYBIND11_MODULE(prtsub, m) {
           py::gil_scoped_release release;
           const RayScene scene(a.vertices, a.mesh.triangles);
           const SurfaceHits hits = trace_primary(scene, cam, width, height, threads);
-          *frame = shade_gouraud(hits, a.mesh.triangles, vertex_radiance(a.transfer, sh, albedo));
+          *frame = shade_gouraud(hits, a.mesh.triangles, a.albedo.rows() > 0 ? vertex_radiance(a.transfer, sh, a.albedo)
+                                                                             : vertex_radiance(a.transfer, sh, albedo));
         }
         py::capsule owner(frame, [](void* p) { delete static_cast<Image*>(p); });
         return py::array(py::dtype::of<float>(), {frame->height, frame->width, frame->channels},
@@ -373,7 +402,7 @@ PYBIND11_MODULE(prtsub, m) {
                           static_cast<py::ssize_t>(sizeof(float)) * frame->channels, static_cast<py::ssize_t>(sizeof(float))},
                          frame->pixels.data(), owner);
       }, py::arg("asset"), py::arg("light"), py::arg("size") = std::pair<int, int>{800, 600}, py::arg("camera") = py::none(),
-      py::arg("albedo") = 0.8, py::arg("threads") = 0,
+      py::arg("albedo") = py::none(), py::arg("threads") = 0,
       "The Gouraud frame `prtsub render` writes: (height, width, 4) float32 linear RGBA, row 0 at the top.\n"
       "camera: None (framed automatically) or dict(eye=..., target=..., up=..., fov=degrees).");
 }

@@ -5,7 +5,11 @@
 
 #include <algorithm>
 
+#include <cmath>
+
 namespace prtsub {
+
+double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 
 RowMatrixX3d vertex_positions(const Mesh& mesh) {
   RowMatrixX3d p(static_cast<Eigen::Index>(mesh.num_vertices()), 3);

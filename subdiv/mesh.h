@@ -37,6 +37,7 @@ struct MeshDefects {
   size_t polygons_triangulated = 0;  //!< input faces with more than three corners
   size_t invalid_file_normals = 0;   //!< zero or non-finite normals in the file (recomputed)
   size_t corners_without_uv = 0;     //!< corners of a mesh with UVs that the file gave none (0, 0)
+  size_t vertices_without_colour = 0;  //!< OBJ vertices of a coloured mesh that the file gave no colour (white)
 };
 
 //! A triangle mesh with welded positions and per-crease-side render vertices.
@@ -47,6 +48,9 @@ struct Mesh {
   //! #V by 2 texture coordinates (u, v) as the file gives them, or no rows when it has none.
   //! A position on a UV seam has one render vertex per side, as on a crease.
   RowMatrixX2d uv;
+  //! #V by 3 vertex colours, linear RGB in [0, 1] (decoded from the file's sRGB), or no rows
+  //! when the file has none. Interpolated like UVs where refinement adds vertices.
+  RowMatrixX3d colors;
   std::vector<Triangle> triangles;       //!< #F, render-vertex indices, counter-clockwise
   std::vector<uint32_t> source_face;     //!< #F, index of the input triangle it lies in
   size_t input_triangles = 0;            //!< triangles in the input after triangulation
@@ -56,12 +60,16 @@ struct Mesh {
   MeshDefects defects;
 
   bool has_uv() const { return uv.rows() > 0; }
+  bool has_colors() const { return colors.rows() > 0; }
 
   size_t num_vertices() const { return vertex_position.size(); }
   size_t num_faces() const { return triangles.size(); }
   //! Position of render vertex v.
   Eigen::Vector3d point(uint32_t v) const { return positions.row(vertex_position[v]).transpose(); }
 };
+
+//! The sRGB decoding of an encoded value in [0, 1] to linear (IEC 61966-2-1).
+double srgb_to_linear(double v);
 
 //! Positions of render vertices: #V by 3.
 RowMatrixX3d vertex_positions(const Mesh& mesh);

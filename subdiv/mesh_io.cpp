@@ -15,6 +15,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <array>
 #include <unordered_map>
 
 #include "prtsub/subdiv/exceptions.h"
@@ -117,7 +118,8 @@ struct PositionHash {
 }  // namespace
 
 RawMesh parse_obj(const std::string& bytes, const std::string& path) {
-  std::vector<double> pos, nrm, tex;
+  std::vector<double> pos, nrm, tex, rgb;
+  std::vector<char> coloured;  // per v line: had `r g b` after its coordinates
   RawMesh raw;
   raw.face_offsets.push_back(0);
   bool any_corner_normal = false, any_corner_texcoord = false;
@@ -137,6 +139,15 @@ RawMesh parse_obj(const std::string& bytes, const std::string& path) {
     if (!next_token(rest, tok) || tok[0] == '#') continue;
     if (tok == "v") {
       read_xyz(rest, pos, path, lines.line_no);
+      // `v x y z r g b` (MeshLab, ZBrush, many scanners) carries a vertex colour; `v x y z w` a
+      // weight, which is not ours.
+      std::string_view more = rest, t;
+      int n = 0;
+      double c[3];
+      while (n < 3 && next_token(more, t)) c[n++] = parse_double(t, path, lines.line_no);
+      coloured.push_back(n == 3);
+      if (n == 3) rgb.insert(rgb.end(), {c[0], c[1], c[2]});
+      else rgb.insert(rgb.end(), {1.0, 1.0, 1.0});
     } else if (tok == "vn") {
       read_xyz(rest, nrm, path, lines.line_no);
     } else if (tok == "vt") {
@@ -173,6 +184,8 @@ RawMesh parse_obj(const std::string& bytes, const std::string& path) {
   }
   raw.positions = to_matrix(pos);
   raw.normals = to_matrix(nrm);
+  const size_t with_colour = static_cast<size_t>(std::count(coloured.begin(), coloured.end(), 1));
+  if (with_colour > 0) raw.colors = to_matrix(rgb), raw.vertices_without_colour = coloured.size() - with_colour;
   if (!any_corner_normal) raw.corner_normals.clear(), raw.normals.resize(0, 3);
   if (any_corner_texcoord) {
     raw.texcoords.resize(static_cast<Eigen::Index>(tex.size() / 2), 2);
@@ -317,6 +330,18 @@ RawMesh parse_ply_mesh(const std::string& bytes, const std::string& path) {
     for (size_t i = 0; i < v->count; ++i) raw.texcoords.row(static_cast<Eigen::Index>(i)) << (*u)[i], (*w)[i];
     break;
   }
+  for (auto names : {std::array<const char*, 3>{"red", "green", "blue"}, std::array<const char*, 3>{"r", "g", "b"},
+                     std::array<const char*, 3>{"diffuse_red", "diffuse_green", "diffuse_blue"}}) {
+    const std::vector<double>* c[3] = {v->scalar(names[0]), v->scalar(names[1]), v->scalar(names[2])};
+    if (!c[0] || !c[1] || !c[2]) continue;
+    raw.colors.resize(static_cast<Eigen::Index>(v->count), 3);
+    for (int k = 0; k < 3; ++k) {
+      const size_t column = static_cast<size_t>(std::find(v->scalar_names.begin(), v->scalar_names.end(), names[k]) - v->scalar_names.begin());
+      const double unit = v->scalar_unit[column];
+      for (size_t i = 0; i < v->count; ++i) raw.colors(static_cast<Eigen::Index>(i), k) = (*c[k])[i] / unit;
+    }
+    break;
+  }
   raw.face_offsets.push_back(0);
   if (f) {
     int li = f->list("vertex_indices");
@@ -358,6 +383,12 @@ void validate_raw(const RawMesh& raw, const std::string& path) {
   for (Eigen::Index i = 0; i < raw.texcoords.rows(); ++i)
     if (!raw.texcoords.row(i).allFinite())
       throw InputError(path + ": texture coordinate " + std::to_string(i) + " is not finite");
+  if (raw.colors.rows() > 0 && raw.colors.rows() != raw.positions.rows())
+    throw InputError(path + ": " + std::to_string(raw.colors.rows()) + " vertex colours for " + std::to_string(raw.positions.rows()) + " vertices");
+  for (Eigen::Index i = 0; i < raw.colors.rows(); ++i)
+    if (!raw.colors.row(i).allFinite() || raw.colors.row(i).minCoeff() < 0 || raw.colors.row(i).maxCoeff() > 1)
+      throw InputError(path + ": vertex " + std::to_string(i) + " has a colour outside [0, 1] (" + std::to_string(raw.colors(i, 0)) + ", " +
+                       std::to_string(raw.colors(i, 1)) + ", " + std::to_string(raw.colors(i, 2)) + ")");
 }
 
 // Welds referenced vertices by exact position, in input order, into mesh.positions; returns
@@ -499,7 +530,8 @@ void make_render_vertices(const RawMesh& raw, const PositionTriangles& pt, const
   const CornerNormals computed = compute_corner_normals(mesh.positions, pt.tri, options.crease_angle_deg);
   const bool per_corner_uv = !raw.corner_texcoords.empty();
   const bool has_uv = per_corner_uv || raw.texcoords.rows() > 0;
-  std::vector<double> uvs, normals;
+  const bool has_colors = raw.colors.rows() > 0;
+  std::vector<double> uvs, normals, colors;
   std::unordered_map<VertexKey, uint32_t, VertexHash> vertex_of;
   vertex_of.reserve(pt.tri.size() * 2);
   mesh.triangles.resize(pt.tri.size());
@@ -523,11 +555,18 @@ void make_render_vertices(const RawMesh& raw, const PositionTriangles& pt, const
         mesh.vertex_position.push_back(p);
         normals.insert(normals.end(), {n.x(), n.y(), n.z()});
         if (has_uv) uvs.insert(uvs.end(), {uv.x(), uv.y()});
+        // A render vertex takes the colour of the file vertex of its first corner: colours do
+        // not split positions (two file vertices welded at one point keep the first's).
+        if (has_colors) {
+          const auto row = static_cast<Eigen::Index>(raw.face_indices[pt.corner[f][size_t(k)]]);
+          for (int c = 0; c < 3; ++c) colors.push_back(raw.colors_linear ? raw.colors(row, c) : srgb_to_linear(raw.colors(row, c)));
+        }
       }
       mesh.triangles[f][size_t(k)] = it->second;
     }
   }
   mesh.normals = to_matrix(normals);
+  if (has_colors) mesh.colors = to_matrix(colors), mesh.defects.vertices_without_colour = raw.vertices_without_colour;
   if (has_uv) {
     mesh.uv.resize(static_cast<Eigen::Index>(uvs.size() / 2), 2);
     std::memcpy(mesh.uv.data(), uvs.data(), uvs.size() * sizeof(double));

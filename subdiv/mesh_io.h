@@ -21,6 +21,11 @@ struct RawMesh {
   RowMatrixX2d texcoords;  //!< #T by 2 file texture coordinates (may be empty)
   //! Per corner: row of `texcoords`, or -1; empty when they are per vertex (one row per position).
   std::vector<int64_t> corner_texcoords;
+  //! #Pin by 3 vertex colours as the file stores them, normalised to [0, 1] but still
+  //! sRGB-encoded (may be empty)
+  RowMatrixX3d colors;
+  bool colors_linear = false;  //!< the colours are linear already (built in memory, not read)
+  size_t vertices_without_colour = 0;  //!< OBJ: `v` lines without one in a file that has some
 };
 
 struct LoadOptions {

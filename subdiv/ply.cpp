@@ -118,6 +118,21 @@ class AsciiReader {
   const std::string& path_;
 };
 
+// The value of a type that stands for 1.0 in a normalised quantity (a colour).
+double type_unit(PlyType t) {
+  switch (t) {
+    case PlyType::Int8: return 127;
+    case PlyType::UInt8: return 255;
+    case PlyType::Int16: return 32767;
+    case PlyType::UInt16: return 65535;
+    case PlyType::Int32: return 2147483647.0;
+    case PlyType::UInt32: return 4294967295.0;
+    case PlyType::Float32:
+    case PlyType::Float64: return 1;
+  }
+  return 1;
+}
+
 // Smallest number of bytes one row of the element can take, to reject lying counts early.
 size_t min_row_bytes(const ElementDecl& e) {
   size_t n = 0;
@@ -241,6 +256,7 @@ PlyElement empty_element(const ElementDecl& d, std::vector<int>& slot) {
     } else {
       slot[k] = static_cast<int>(e.scalar_names.size());
       e.scalar_names.push_back(d.properties[k].name);
+      e.scalar_unit.push_back(type_unit(d.properties[k].type));
       e.scalars.emplace_back();
       e.scalars.back().reserve(d.count);
     }

@@ -16,6 +16,10 @@ struct PlyElement {
   size_t count = 0;
   std::vector<std::string> scalar_names;
   std::vector<std::vector<double>> scalars;  //!< [property][row]
+  //! [property]: the stored value that stands for 1.0 in a normalised quantity such as a colour
+  //! (255 for uchar, 65535 for ushort, 2³²−1 for uint, the largest positive value for signed
+  //! integers); 1 for float and double
+  std::vector<double> scalar_unit;
   std::vector<std::string> list_names;
   std::vector<std::vector<size_t>> list_offsets;  //!< [property][row + 1]
   std::vector<std::vector<double>> list_values;   //!< [property][flattened]

@@ -64,6 +64,7 @@ class Refiner {
     vpos_ = mesh.vertex_position;
     for (Eigen::Index i = 0; i < mesh.normals.rows(); ++i) nrm_.push_back(mesh.normals.row(i).transpose());
     uv_.assign(mesh.uv.data(), mesh.uv.data() + mesh.uv.size());
+    rgb_.assign(mesh.colors.data(), mesh.colors.data() + mesh.colors.size());
     val_.assign(values.data(), values.data() + values.size());
     if (A_) attr_.assign(attributes->data(), attributes->data() + attributes->size());
     tri_ = mesh.triangles;
@@ -87,6 +88,7 @@ class Refiner {
     vpos_.reserve(vpos_.size() + extra);
     nrm_.reserve(nrm_.size() + extra);
     uv_.reserve(uv_.size() + (uv_.empty() ? 0 : 2 * extra));
+    rgb_.reserve(rgb_.size() + (rgb_.empty() ? 0 : 3 * extra));
     val_.reserve(val_.size() + extra * static_cast<size_t>(K_));
     attr_.reserve(attr_.size() + extra * static_cast<size_t>(A_));
     link_.reserve(3 * budget);
@@ -182,6 +184,7 @@ class Refiner {
     mesh_.normals.resize(static_cast<Eigen::Index>(nrm_.size()), 3);
     for (size_t i = 0; i < nrm_.size(); ++i) mesh_.normals.row(static_cast<Eigen::Index>(i)) = nrm_[i].transpose();
     if (!uv_.empty()) mesh_.uv = Eigen::Map<RowMatrixX2d>(uv_.data(), static_cast<Eigen::Index>(vpos_.size()), 2);
+    if (!rgb_.empty()) mesh_.colors = Eigen::Map<RowMatrixX3d>(rgb_.data(), static_cast<Eigen::Index>(vpos_.size()), 3);
     mesh_.triangles = tri_;
     mesh_.source_face = src_;
     values_out_ = Eigen::Map<RowMatrixXd>(val_.data(), static_cast<Eigen::Index>(vpos_.size()), K_);
@@ -378,6 +381,7 @@ class Refiner {
       const double u = 0.5 * (uv_[2 * size_t(a)] + uv_[2 * size_t(b)]), w = 0.5 * (uv_[2 * size_t(a) + 1] + uv_[2 * size_t(b) + 1]);
       uv_.push_back(u), uv_.push_back(w);
     }
+    for (size_t c = 0; !rgb_.empty() && c < 3; ++c) rgb_.push_back(0.5 * (rgb_[3 * size_t(a) + c] + rgb_[3 * size_t(b) + c]));
     for (int i = 0; i < K_; ++i) val_.push_back(0.5 * (val_[size_t(a) * K_ + i] + val_[size_t(b) * K_ + i]));
     for (int i = 0; i < A_; ++i) attr_.push_back(0.5 * (attr_[size_t(a) * A_ + i] + attr_[size_t(b) * A_ + i]));
     pending_.push_back({v, a, b, position, pos_[position], nrm_.back()});
@@ -410,6 +414,7 @@ class Refiner {
   std::vector<double> extra_;  // probe keys of faces not yet split
   std::vector<Eigen::Vector3d> pos_, nrm_;
   std::vector<double> uv_;  // 2 per render vertex, or empty
+  std::vector<double> rgb_;  // 3 per render vertex (linear colour), or empty
   std::vector<uint32_t> vpos_, src_;
   std::vector<double> val_, attr_;
   std::vector<Triangle> tri_;
@@ -472,6 +477,9 @@ RefineStats refine_adaptive(Mesh& mesh, RowMatrixXd& values, RefinementSignal& s
   }
   if (mesh.has_uv() && static_cast<size_t>(mesh.uv.rows()) != mesh.num_vertices())
     throw InputError("refine: the mesh has " + std::to_string(mesh.uv.rows()) + " UVs for " +
+                     std::to_string(mesh.num_vertices()) + " render vertices");
+  if (mesh.has_colors() && static_cast<size_t>(mesh.colors.rows()) != mesh.num_vertices())
+    throw InputError("refine: the mesh has " + std::to_string(mesh.colors.rows()) + " colours for " +
                      std::to_string(mesh.num_vertices()) + " render vertices");
   Refiner r(mesh, values, attributes, signal);
   stats.non_manifold_edges = r.non_manifold_edges();

@@ -479,12 +479,14 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
   out.vertex_position.resize(render_order.size());
   out.normals.resize(static_cast<Eigen::Index>(render_order.size()), 3);
   if (mesh.has_uv()) out.uv.resize(static_cast<Eigen::Index>(render_order.size()), 2);
+  if (mesh.has_colors()) out.colors.resize(static_cast<Eigen::Index>(render_order.size()), 3);
   RowMatrixXd vals(static_cast<Eigen::Index>(render_order.size()), values.cols());
   for (size_t i = 0; i < render_order.size(); ++i) {
     const uint32_t v = render_order[i];
     out.vertex_position[i] = pos_to[mesh.vertex_position[v]];
     out.normals.row(Eigen::Index(i)) = mesh.normals.row(v);
     if (mesh.has_uv()) out.uv.row(Eigen::Index(i)) = mesh.uv.row(v);
+    if (mesh.has_colors()) out.colors.row(Eigen::Index(i)) = mesh.colors.row(v);
     vals.row(Eigen::Index(i)) = values.row(v);
   }
   out.triangles = std::move(tri);

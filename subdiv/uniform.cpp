@@ -104,9 +104,9 @@ std::unique_ptr<Far::TopologyRefiner> refine_topology(const Mesh& mesh, const Un
 // Positions (vertex data), normals and UVs (face-varying) at every level; the last level's
 // values start at `p`, `n` and `uv`.
 struct Primvars {
-  std::vector<Vec3> pos, nrm;
+  std::vector<Vec3> pos, nrm, rgb;
   std::vector<Vec2> uvs;
-  const Vec3 *p = nullptr, *n = nullptr;
+  const Vec3 *p = nullptr, *n = nullptr, *c = nullptr;
   const Vec2* uv = nullptr;
 };
 
@@ -119,8 +119,10 @@ Primvars interpolate(const Far::TopologyRefiner& refiner, const Mesh& mesh, cons
   // UVs ride on the same face-varying channel (render vertices), linearly: a seam stays a seam.
   pv.uvs.resize(mesh.has_uv() ? pv.nrm.size() : 0);
   for (Eigen::Index i = 0; i < mesh.uv.rows(); ++i) pv.uvs[size_t(i)] = {mesh.uv(i, 0), mesh.uv(i, 1)};
+  pv.rgb.resize(mesh.has_colors() ? pv.nrm.size() : 0);  // colours too, linearly
+  for (Eigen::Index i = 0; i < mesh.colors.rows(); ++i) pv.rgb[size_t(i)] = {mesh.colors(i, 0), mesh.colors(i, 1), mesh.colors(i, 2)};
   Far::PrimvarRefiner primvar(refiner);
-  Vec3 *psrc = pv.pos.data(), *nsrc = pv.nrm.data();
+  Vec3 *psrc = pv.pos.data(), *nsrc = pv.nrm.data(), *csrc = pv.rgb.data();
   Vec2* usrc = pv.uvs.data();
   for (int level = 1; level <= opt.levels; ++level) {
     Vec3* pdst = psrc + refiner.GetLevel(level - 1).GetNumVertices();
@@ -134,9 +136,14 @@ Primvars interpolate(const Far::TopologyRefiner& refiner, const Mesh& mesh, cons
       primvar.InterpolateFaceVarying(level, usrc, udst, 0);
       usrc = udst;
     }
+    if (mesh.has_colors()) {
+      Vec3* cdst = csrc + fvar_before;
+      primvar.InterpolateFaceVarying(level, csrc, cdst, 0);
+      csrc = cdst;
+    }
     psrc = pdst, nsrc = ndst;
   }
-  pv.p = psrc, pv.n = nsrc, pv.uv = usrc;
+  pv.p = psrc, pv.n = nsrc, pv.uv = usrc, pv.c = csrc;
   return pv;
 }
 
@@ -151,6 +158,17 @@ Mesh loop_mesh(const Far::TopologyLevel& last, const Primvars& pv, const Mesh& m
     if (mesh.has_uv())
       for (int v : last.GetFaceFVarValues(f, 0)) raw.corner_texcoords.push_back(v);
     raw.face_offsets.push_back(raw.face_indices.size());
+  }
+  if (mesh.has_colors()) {  // per position, from the first corner at it (as reading a file does)
+    raw.colors.setConstant(last.GetNumVertices(), 3, -1);
+    raw.colors_linear = true;
+    for (int f = 0; f < last.GetNumFaces(); ++f) {
+      auto fv = last.GetFaceVertices(f);
+      auto fvar = last.GetFaceFVarValues(f, 0);
+      for (int k = 0; k < fv.size(); ++k)
+        if (raw.colors(fv[k], 0) < 0) raw.colors.row(fv[k]) << pv.c[fvar[k]].x, pv.c[fvar[k]].y, pv.c[fvar[k]].z;
+    }
+    raw.colors = raw.colors.cwiseMax(0.0).cwiseMin(1.0);
   }
   if (mesh.has_uv()) {
     raw.texcoords.resize(last.GetNumFVarValues(0), 2);
@@ -176,6 +194,10 @@ Mesh linear_mesh(const Far::TopologyLevel& last, const Primvars& pv, const Mesh&
   if (mesh.has_uv()) {
     out.uv.resize(nv, 2);
     for (int i = 0; i < nv; ++i) out.uv.row(i) << pv.uv[i].u, pv.uv[i].v;
+  }
+  if (mesh.has_colors()) {
+    out.colors.resize(nv, 3);
+    for (int i = 0; i < nv; ++i) out.colors.row(i) << pv.c[i].x, pv.c[i].y, pv.c[i].z;
   }
   out.triangles.resize(static_cast<size_t>(last.GetNumFaces()));
   for (int f = 0; f < last.GetNumFaces(); ++f) {

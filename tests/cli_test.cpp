@@ -11,6 +11,7 @@
 
 #include "cli_helpers.h"
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/image_io.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/mesh_io.h"
 #include "prtsub/subdiv/ply.h"
@@ -420,6 +421,64 @@ TEST_F(Cli, ABouncedAssetIsJudgedAndRenderedAgainstBouncedLightAtItsOwnAlbedo) {
   EXPECT_GT(test::json_number(rb, "mean_radiance"), 1.01 * test::json_number(rd, "mean_radiance"));
   EXPECT_EQ(test::json_number(rb, "reference_bounces"), 2);
   EXPECT_EQ(test::json_number(rb, "reference_albedo"), 0.6);
+}
+
+TEST_F(Cli, ColouredAlbedoBouncesAsRgbTransferThatEvalAndRenderJudgeInColour) {
+  // A red plate facing down over a white ground, as OBJ vertex colours (sRGB 1 and 0 are exact);
+  // the ground has UVs for the map case.
+  const std::string in = dir.path("red.obj"), asset = dir.path("c.ply");
+  test::write_text(in, "v -2 -2 0 1 1 1\nv 2 -2 0 1 1 1\nv 2 2 0 1 1 1\nv -2 2 0 1 1 1\n"
+                       "v -1 -1 0.5 1 0 0\nv 1 -1 0.5 1 0 0\nv 1 1 0.5 1 0 0\nv -1 1 0.5 1 0 0\n"
+                       "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                       "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\nf 5/1 7/3 6/2\nf 5/1 8/4 7/3\n");
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", asset, "--rays", "32", "--bounces", "2", "--albedo", "vertex", "--report", dir.path("b.json")}), 0);
+  ASSERT_EQ(run({"inspect", asset}), 0);
+  ASSERT_EQ(run({"eval", asset, "--source", in, "--points", "300", "--paths", "64", "--report", dir.path("e.json")}), 0);
+  ASSERT_EQ(run({"render", asset, "--light", "const:1,1,1", "--size", "32,24", "-o", dir.path("g.png"), "--report", dir.path("g.json")}), 0);
+  ASSERT_EQ(run({"render", asset, "--light", "const:1,1,1", "--reference", "--rays", "32", "--size", "32,24", "-o", dir.path("r.png")}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("coefficients per vertex, per channel: RGB transfer); albedo per vertex"), std::string::npos) << out;
+  EXPECT_NE(out.find("bounced:    2 bounces at albedo vertex colours"), std::string::npos) << out;
+  const Asset a = read_asset(asset);
+  EXPECT_EQ(a.channels, 3);
+  ASSERT_EQ(a.albedo.rows(), a.transfer.rows());
+  // The plate's underside sees only the white ground: all its channels bounce alike. The ground
+  // sees the red plate: its green channel gets nothing the plate did not send it.
+  const Eigen::Index K = a.transfer.cols() / 3;
+  double ground_red = 0, ground_green = 0;
+  for (Eigen::Index v = 0; v < a.transfer.rows(); ++v)
+    if (a.positions(v, 2) == 0) ground_red += a.transfer(v, 0), ground_green += a.transfer(v, K);
+  EXPECT_GT(ground_red, 1.01 * ground_green);
+  EXPECT_EQ(test::json_number(read_file_bytes(dir.path("e.json")), "channels"), 3);
+  EXPECT_EQ(test::json_number(read_file_bytes(dir.path("b.json")), "channels"), 3);
+  // A map through the UVs: 2 by 2 pixels, 8-bit sRGB, decoded; the asset's albedo at a vertex is
+  // the map there, and eval reads the map the asset names.
+  Image map;
+  map.width = 2, map.height = 2, map.channels = 3;
+  map.pixels = {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+  write_image(dir.path("m.png"), map);
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", dir.path("m.ply"), "--rays", "32", "--bounces", "1", "--albedo-map", dir.path("m.png")}), 0);
+  ASSERT_EQ(run({"eval", dir.path("m.ply"), "--source", in, "--points", "200", "--paths", "32"}), 0);
+  testing::internal::GetCapturedStdout();
+  const Asset m = read_asset(dir.path("m.ply"));
+  EXPECT_EQ(m.channels, 3);
+  for (Eigen::Index v = 0; v < m.albedo.rows(); ++v)  // a corner's UV is a pixel's outer corner: the pixels' mean there (repeating)
+    EXPECT_NEAR(m.albedo.row(v).sum(), 1.5, 1e-6) << v;
+  // What cannot be: a grey --albedo on a coloured asset, colours the input lacks, a missing map,
+  // two albedos at once.
+  const size_t before = files();
+  EXPECT_EQ(run({"render", asset, "--light", "sky", "--albedo", "0.5", "-o", dir.path("x.png")}), 2);
+  EXPECT_EQ(run({"bake", scene(), "--albedo", "vertex", "--bounces", "1", "-o", dir.path("x.ply")}), 1);
+  EXPECT_EQ(run({"bake", in, "--albedo-map", dir.path("none.png"), "--bounces", "1", "-o", dir.path("x.ply")}), 1);
+  EXPECT_EQ(run({"bake", in, "--albedo", "0.8,0.5", "-o", dir.path("x.ply")}), 2);
+  EXPECT_EQ(run({"bake", in, "--albedo", "0.5", "--albedo-map", dir.path("m.png"), "-o", dir.path("x.ply")}), 2);
+  EXPECT_EQ(files(), before + 1);  // scene.obj, and nothing else
+  testing::internal::CaptureStderr();
+  run({"bake", scene(), "--albedo", "vertex", "-o", dir.path("x.ply")});
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find(dir.path("scene.obj") + ": albedo from vertex colours, but the mesh has none"), std::string::npos) << err;
 }
 
 TEST_F(Cli, ABudgetBelowTheInputSimplifiesAndEvalLocatesItsPointsByClosestPoint) {

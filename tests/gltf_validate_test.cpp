@@ -65,6 +65,7 @@ TEST(GltfValidator, EveryBakedVariantIsValidAndCompressedFilesDecodeToTheUncompr
       {"z.glb", {"--up", "z", "--order", "5"}},
       {"ao.glb", {"--signal", "ao"}},
       {"aoc.glb", {"--signal", "ao", "--compress"}},
+      {"rgb.glb", {"--bounces", "1", "--albedo", "0.9,0.5,0.2", "--quantize", "--compress"}},
   };
   std::string files;
   for (const auto& [name, extra] : variants) {

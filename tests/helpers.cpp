@@ -175,6 +175,12 @@ RawMesh merge(const RawMesh& a, const RawMesh& b) {
     for (size_t c = b.face_offsets[f]; c < b.face_offsets[f + 1]; ++c) m.face_indices.push_back(b.face_indices[c] + shift);
     m.face_offsets.push_back(m.face_indices.size());
   }
+  if (a.colors.rows() > 0 || b.colors.rows() > 0) {  // a part without colours is white
+    m.colors.setOnes(m.positions.rows(), 3);
+    if (a.colors.rows() > 0) m.colors.topRows(a.colors.rows()) = a.colors;
+    if (b.colors.rows() > 0) m.colors.bottomRows(b.colors.rows()) = b.colors;
+    m.colors_linear = a.colors.rows() > 0 ? a.colors_linear : b.colors_linear;
+  }
   return m;
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -160,6 +161,40 @@ TEST_F(MeshIo, TextureCoordinatesMakeSeamsLikeCreases) {
   expect_error(file("r.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"), "texture coordinate index 2 out of range");
   expect_error(file("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt nan 0\nf 1/1 2/1 3/1\n"), "texture coordinate 0 is not finite");
   expect_error(file("e.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt\nf 1/1 2/1 3/1\n"), "expected a texture coordinate");
+}
+
+TEST_F(MeshIo, VertexColoursAreDecodedFromSrgbToLinear) {
+  // PLY uchar: 255 is 1, 0 is 0, and 188 decodes by the sRGB curve ((188/255 + 0.055)/1.055)^2.4.
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                          "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 2\n"
+                          "property list uchar int vertex_indices\nend_header\n"
+                          "0 0 0 255 0 188\n1 0 0 255 0 188\n1 1 0 255 0 188\n0 1 0 10 20 30\n3 0 1 2\n3 0 2 3\n";
+  const Mesh m = load_mesh(file("c.ply", ply));
+  ASSERT_TRUE(m.has_colors());
+  ASSERT_EQ(static_cast<size_t>(m.colors.rows()), m.num_vertices());
+  const double c188 = std::pow((188 / 255.0 + 0.055) / 1.055, 2.4), c10 = 10 / 255.0 / 12.92;
+  bool saw_last = false;
+  for (uint32_t v = 0; v < m.num_vertices(); ++v) {
+    if (m.point(v) == Eigen::Vector3d(0, 1, 0)) {
+      EXPECT_NEAR(m.colors(v, 0), c10, 1e-15);
+      saw_last = true;
+      continue;
+    }
+    EXPECT_EQ(m.colors(v, 0), 1.0);
+    EXPECT_EQ(m.colors(v, 1), 0.0);
+    EXPECT_NEAR(m.colors(v, 2), c188, 1e-15);
+  }
+  EXPECT_TRUE(saw_last);
+  // PLY floats in [0, 1] and OBJ `v x y z r g b` are sRGB-encoded too; a `v` line without one
+  // in a coloured OBJ is white and counted.
+  const Mesh o = load_mesh(file("c.obj", "v 0 0 0 0.5 0.5 0.5\nv 1 0 0 0.5 0.5 0.5\nv 1 1 0\nf 1 2 3\n"));
+  ASSERT_TRUE(o.has_colors());
+  EXPECT_EQ(o.defects.vertices_without_colour, 1u);
+  const double half = std::pow((0.5 + 0.055) / 1.055, 2.4);
+  for (uint32_t v = 0; v < o.num_vertices(); ++v) EXPECT_NEAR(o.colors(v, 1), o.point(v).y() > 0 ? 1.0 : half, 1e-15);
+  EXPECT_FALSE(load_mesh(file("plain.obj", kSquareObj)).has_colors());
+  EXPECT_FALSE(load_mesh(file("w.obj", "v 0 0 0 1\nv 1 0 0 1\nv 1 1 0 1\nf 1 2 3\n")).has_colors());  // a weight, not a colour
+  expect_error(file("bright.obj", "v 0 0 0 2 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"), "has a colour outside [0, 1]");
 }
 
 TEST_F(MeshIo, WeldsExactPositionsIncludingSignedZero) {

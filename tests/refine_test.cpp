@@ -6,6 +6,7 @@
 #include <set>
 
 #include "helpers.h"
+#include "prtsub/subdiv/uniform.h"
 #include "prtsub/subdiv/random.h"
 
 namespace prtsub {
@@ -156,6 +157,37 @@ TEST(Refine, CreasesKeepOneVertexPerSideAndNormalsStayExact) {
     EXPECT_NEAR(uv(i, 0), m.point(i).x(), 1e-15);
     EXPECT_NEAR(uv(i, 1), 2 * m.point(i).y() + 1, 1e-15);
   }
+}
+
+TEST(Refine, VertexColoursRefineAsLinearAttributes) {
+  // A colour that is an affine function of position is reproduced exactly at every new vertex,
+  // by adaptive and by uniform (linear) refinement alike.
+  RawMesh raw = test::cube();
+  raw.colors.resize(raw.positions.rows(), 3);
+  for (Eigen::Index i = 0; i < raw.positions.rows(); ++i)
+    raw.colors.row(i) << raw.positions(i, 0), 0.5 * raw.positions(i, 1) + 0.25, 1 - raw.positions(i, 2);
+  raw.colors_linear = true;
+  const Mesh base = test::build(raw, 60.0);
+  ASSERT_TRUE(base.has_colors());
+  auto expect_affine = [](const Mesh& m, const char* what) {
+    ASSERT_EQ(static_cast<size_t>(m.colors.rows()), m.num_vertices()) << what;
+    for (uint32_t i = 0; i < m.num_vertices(); ++i) {
+      const Eigen::Vector3d p = m.point(i);
+      EXPECT_NEAR(m.colors(i, 0), p.x(), 1e-12) << what;
+      EXPECT_NEAR(m.colors(i, 1), 0.5 * p.y() + 0.25, 1e-12) << what;
+      EXPECT_NEAR(m.colors(i, 2), 1 - p.z(), 1e-12) << what;
+    }
+  };
+  Mesh m = base;
+  StepSignal s;
+  s.x0 = 0.5, s.width = 0.2;
+  RowMatrixXd v = s.initial(m);
+  refine_adaptive(m, v, s, RefineOptions{200, 8, 0});
+  EXPECT_EQ(m.num_faces(), 200u);
+  expect_affine(m, "adaptive");
+  UniformOptions u;
+  u.levels = 2;
+  expect_affine(refine_uniform(base, u), "uniform");
 }
 
 TEST(Refine, UvSeamsRefinePerSideWithMidpointUvs) {

@@ -156,6 +156,25 @@ class BakeTest(unittest.TestCase):
         self.assertEqual(ours.stats["bounces"], 2)
         self.assertGreater(ours.transfer[:, 0].sum(), direct.transfer[:, 0].sum())
 
+    def test_coloured_bounces_are_rgb_as_the_tool_bakes_them(self):
+        write_obj(self.path("box.obj"), self.vertices, self.faces)
+        ours = prtsub.bake(self.vertices, self.faces, order=2, rays=32, fit="point", bounces=2, albedo=(0.9, 0.5, 0.2))
+        subprocess.run([BINARY, "bake", self.path("box.obj"), "-o", self.path("c.ply"), "--order", "2", "--rays", "32", "--fit", "point",
+                        "--bounces", "2", "--albedo", "0.9,0.5,0.2"], check=True, capture_output=True)
+        tools = prtsub.load(self.path("c.ply"))
+        self.assertEqual((ours.channels, tools.channels), (3, 3))
+        self.assertEqual(ours.transfer.shape, (len(ours.vertices), 12))
+        np.testing.assert_allclose(ours.transfer, tools.transfer, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(tools.albedo, np.tile([0.9, 0.5, 0.2], (len(ours.vertices), 1)), atol=1e-7)
+        # Each channel is the grey bake at that channel's albedo.
+        for c, a in enumerate((0.9, 0.5, 0.2)):
+            grey = prtsub.bake(self.vertices, self.faces, order=2, rays=32, fit="point", bounces=2, albedo=a)
+            np.testing.assert_allclose(ours.transfer[:, 4 * c:4 * c + 4], grey.transfer, rtol=0, atol=1e-12)
+        frame = prtsub.render(ours, prtsub.sky(), size=(32, 32))
+        self.assertEqual(frame.shape, (32, 32, 4))
+        with self.assertRaises(Exception):
+            prtsub.render(ours, prtsub.sky(), size=(32, 32), albedo=0.5)
+
     def test_order_auto_chooses_as_the_tool_does(self):
         sphere, ours, tools = self.bake_both("order", ["--order", "auto", "--rays", "16", "--fit", "point"], order="auto", rays=16,
                                              fit="point")

@@ -1,6 +1,6 @@
 // Reads the GLB that `prtsub view` embeds (docs/asset_format.md, "glTF"): positions, normals,
-// indices, and the transfer (_PRT_0.._PRT_k, FLOAT or normalized SHORT with its scales) or AO
-// (_AO). The file is the tool's own, uncompressed; anything else is an error with a message.
+// indices, and the transfer (_PRT_0.._PRT_k, FLOAT or normalized SHORT with its scales; RGB
+// transfer as _PRT_R_j, _PRT_G_j, _PRT_B_j, with the vertices' albedo in COLOR_0) or AO (_AO). The file is the tool's own, uncompressed; anything else is an error with a message.
 
 // componentType: [bytes, DataView getter]
 const COMPONENT = { 5121: [1, 'getUint8'], 5122: [2, 'getInt16'], 5123: [2, 'getUint16'], 5125: [4, 'getUint32'], 5126: [4, 'getFloat32'] };
@@ -36,16 +36,22 @@ export function parseGlb(bytes) {
   const indices = Uint32Array.from(accessor(prim.indices));
   const ao = extras.signal === 'ao';
   const order = ao ? 1 : extras.sh_order, K = order * order;
-  const transfer = new Float64Array(V * K);
+  const channels = ao ? 1 : extras.channels || 1, KC = K * channels;  // per vertex: the channels' blocks side by side
+  const transfer = new Float64Array(V * KC);
+  let albedo = null;
   if (ao) {
     const values = accessor(prim.attributes._AO);
     for (let v = 0; v < V; ++v) transfer[v] = values[v] / 1.1283791670955126;  // t0 = ao · √π / 2
   } else {
-    const scale = extras.quantization ? extras.quantization.scale : new Array(K).fill(1);
-    for (let j = 0; 4 * j < K; ++j) {
-      const values = accessor(prim.attributes['_PRT_' + j]);
-      for (let v = 0; v < V; ++v) for (let c = 4 * j; c < Math.min(K, 4 * j + 4); ++c) transfer[v * K + c] = scale[c] * values[v * 4 + c - 4 * j];
-    }
+    const scale = extras.quantization ? extras.quantization.scale : new Array(KC).fill(1);
+    for (let ch = 0; ch < channels; ++ch)
+      for (let j = 0; 4 * j < K; ++j) {
+        const name = channels === 1 ? '_PRT_' + j : '_PRT_' + 'RGB'[ch] + '_' + j;
+        const values = accessor(prim.attributes[name]);
+        for (let v = 0; v < V; ++v)
+          for (let c = 4 * j; c < Math.min(K, 4 * j + 4); ++c) transfer[v * KC + ch * K + c] = scale[ch * K + c] * values[v * 4 + c - 4 * j];
+      }
+    if (prim.attributes.COLOR_0 !== undefined) albedo = accessor(prim.attributes.COLOR_0);  // linear, VEC3
   }
-  return { positions, normals, indices, transfer, order, signal: ao ? 'ao' : 'transfer', extras };
+  return { positions, normals, indices, transfer, order, channels, albedo, signal: ao ? 'ao' : 'transfer', extras };
 }

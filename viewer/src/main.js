@@ -216,7 +216,7 @@ async function main() {
   if (!gl) throw new Error('WebGL2 is not available in this browser');
   status.webgl2 = true;
 
-  const V = asset.positions.length / 3, K = asset.order * asset.order;
+  const V = asset.positions.length / 3, K = asset.order * asset.order, KC = K * asset.channels;
   const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
   for (let v = 0; v < V; ++v) for (let c = 0; c < 3; ++c) lo[c] = Math.min(lo[c], asset.positions[3 * v + c]), hi[c] = Math.max(hi[c], asset.positions[3 * v + c]);
   const radius = 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
@@ -298,26 +298,29 @@ async function main() {
   const relight = () => {
     let light = state.lights.map(lightOf).reduce(addLights);
     light = rotateLight(light, state.rotation);
-    const f = state.albedo / Math.PI, L = light.coeffs;
-    const shade = (t) => {
-      const n = t.length / K, out = new Float64Array(n * 3);
+    const L = light.coeffs;
+    // channels 3: colour c dots the light's colour c with its own block; an asset's own albedo
+    // (COLOR_0) replaces the page's grey one.
+    const shade = (t, channels, albedo) => {
+      const stride = K * channels, n = t.length / stride, out = new Float64Array(n * 3);
       for (let v = 0; v < n; ++v)
         for (let c = 0; c < 3; ++c) {
+          const base = v * stride + (channels === 3 ? c * K : 0);
           let s = 0;
-          for (let i = 0; i < K; ++i) s += L[3 * i + c] * t[v * K + i];
-          out[3 * v + c] = f * s;
+          for (let i = 0; i < K; ++i) s += L[3 * i + c] * t[base + i];
+          out[3 * v + c] = ((albedo ? albedo[3 * v + c] : state.albedo) / Math.PI) * s;
         }
       return out;
     };
-    radiance = shade(asset.transfer);
-    if (errorMesh) errorRadiance = shade(errorMesh.asset), referenceRadiance = shade(errorMesh.reference);
+    radiance = shade(asset.transfer, asset.channels, asset.albedo);
+    if (errorMesh) errorRadiance = shade(errorMesh.asset, 1, null), referenceRadiance = shade(errorMesh.reference, 1, null);
     fill();
   };
 
   // What each vertex carries into the shader for the current view.
   const fill = () => {
     const target = state.view === 'error' ? errorDraw : main, values = target.values;
-    if (state.view === 'ao') for (let v = 0; v < V; ++v) values.fill(asset.transfer[v * K] * AO_PER_T0, 3 * v, 3 * v + 3);
+    if (state.view === 'ao') for (let v = 0; v < V; ++v) values.fill(asset.transfer[v * KC] * AO_PER_T0, 3 * v, 3 * v + 3);
     else if (state.view === 'error') {
       const P = values.length / 3;
       let mean = 0;
