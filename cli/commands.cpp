@@ -468,10 +468,12 @@ int cmd_eval(int argc, char** argv) {
   args.option("--paths", "P", "an asset baked with --bounces: paths per point tracing the reference's bounced light (0: --rays)",
               &ro.paths, 0, 1 << 20);
   int reference_bounces = -1;
-  double reference_albedo = -1;
+  std::string reference_albedo;
   args.option("--reference-bounces", "N", "judge against N bounces instead of the asset's own count (0: direct light only)",
               &reference_bounces, 0, 64);
-  args.option("--reference-albedo", "A", "with --reference-bounces: the albedo (default the asset's, else 0.8)", &reference_albedo, 0.0, 1.0);
+  args.option("--reference-albedo", "A|R,G,B|vertex|map:PATH", "the reference bounces at this albedo instead of the asset's (default\n"
+              "the asset's, else 0.8); a coloured one judges a grey asset as the same in every channel: what\n"
+              "baking without colour costs", &reference_albedo);
   add_threads_option(args, ro.threads);
   add_report_option(args, report);
   if (!args.parse(argc, argv, 2)) return 0;
@@ -489,12 +491,30 @@ int cmd_eval(int argc, char** argv) {
   ro.bounces = bounces.bounces, ro.albedo = bounces.albedo;
   // How far from interreflected light a direct-only asset is, say: another count than the asset's.
   if (reference_bounces >= 0) ro.bounces = reference_bounces;
-  if (reference_albedo >= 0) ro.albedo = reference_albedo;
-  const Mesh src = load_mesh(source, LoadOptions{crease});
-  if (asset.channels == 3) {  // coloured bounces: the reference bounces with the same albedo, over the source
-    if (reference_albedo >= 0) throw UsageError("eval: " + input + " holds coloured bounces; --reference-albedo is for grey ones");
-    ro.colour = std::make_shared<const AlbedoField>(src, cli_load_albedo(bounces.spec));
+  AlbedoSpec reference_spec = bounces.spec;
+  if (!reference_albedo.empty()) {
+    try {
+      if (reference_albedo.rfind("map:", 0) == 0) reference_spec = AlbedoSpec{}, reference_spec.source = AlbedoSource::Map, reference_spec.map = reference_albedo.substr(4);
+      else reference_spec = parse_albedo(reference_albedo);
+    } catch (const InputError& e) {
+      throw UsageError(std::string("--reference-albedo: ") + e.what());
+    }
+    if (!reference_spec.coloured()) ro.albedo = reference_spec.constant.x();
   }
+  const Mesh src = load_mesh(source, LoadOptions{crease});
+  // Coloured bounces: the reference bounces with that albedo over the source, in RGB.
+  const bool coloured = asset.channels == 3 || (!reference_albedo.empty() && reference_spec.coloured());
+  if (coloured) {
+    if (asset.signal == AssetSignal::Ao) throw UsageError("eval: a coloured --reference-albedo is for transfer assets");
+    if (!reference_spec.coloured()) throw UsageError("eval: " + input + " holds coloured bounces; judge it against a coloured --reference-albedo");
+    try {
+      ro.colour = std::make_shared<const AlbedoField>(src, cli_load_albedo(reference_spec));
+    } catch (const InputError& e) {
+      throw InputError(source + ": " + e.what());
+    }
+  }
+  // A grey asset against a coloured reference: the same transfer in every channel.
+  const RowMatrixXd judged = coloured && asset.channels == 1 ? RowMatrixXd(asset.transfer.replicate(1, 3)) : asset.transfer;
   const RayScene scene(src.positions, position_triangles(src));
   Progress progress("reference", static_cast<size_t>(ro.points) * (ro.bounces > 0 ? 2 : 1), stderr_is_terminal());
   const Reference ref = make_reference(src, scene, ro, [&](size_t n) { progress.add(n); });
@@ -502,8 +522,8 @@ int cmd_eval(int argc, char** argv) {
   const double t_ref = clock.lap();
   // A simplified asset's faces do not lie in the source's: locate by closest point.
   const bool closest = meta.count("simplified") > 0;
-  const EvalResult e = closest ? evaluate_by_closest_point(ref, asset.positions, asset.triangles, asset.transfer, ro.threads)
-                               : evaluate(ref, asset.positions, asset.triangles, asset.source_face, asset.transfer);
+  const EvalResult e = closest ? evaluate_by_closest_point(ref, asset.positions, asset.triangles, judged, ro.threads)
+                               : evaluate(ref, asset.positions, asset.triangles, asset.source_face, judged);
   Report r;
   r.set("command", "eval");
   r.set("location", closest ? "closest point (a simplified asset)" : "source_face");
@@ -522,7 +542,7 @@ int cmd_eval(int argc, char** argv) {
   r.set("asset_bounces", bounces.bounces);
   r.set("channels", asset.channels);
   if (ref.bounces > 0) {
-    if (ro.colour) r.set("albedo", albedo_description(bounces.spec));
+    if (ro.colour) r.set("albedo", albedo_description(reference_spec));
     else r.set("albedo", ro.albedo);
     r.set("reference_paths", ref.paths);
     r.set("seconds_reference_bounces", ref.seconds_bounce);

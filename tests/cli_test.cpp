@@ -452,6 +452,19 @@ TEST_F(Cli, ColouredAlbedoBouncesAsRgbTransferThatEvalAndRenderJudgeInColour) {
   EXPECT_GT(ground_red, 1.01 * ground_green);
   EXPECT_EQ(test::json_number(read_file_bytes(dir.path("e.json")), "channels"), 3);
   EXPECT_EQ(test::json_number(read_file_bytes(dir.path("b.json")), "channels"), 3);
+  // Refined, so that interpolation leaves less than colour does: a grey bake of the scene judged
+  // against the coloured reference (the same points, rays and paths) is further off, since its
+  // green and blue carry light the red plate never sends.
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({"bake", in, "-o", dir.path("c3.ply"), "--rays", "32", "--bounces", "2", "--albedo", "vertex", "--refine", "uniform", "--levels", "3"}), 0);
+  ASSERT_EQ(run({"bake", in, "-o", dir.path("g3.ply"), "--rays", "32", "--bounces", "2", "--albedo", "1", "--refine", "uniform", "--levels", "3"}), 0);
+  ASSERT_EQ(run({"eval", dir.path("c3.ply"), "--source", in, "--points", "300", "--paths", "64", "--report", dir.path("c3.json")}), 0);
+  ASSERT_EQ(run({"eval", dir.path("g3.ply"), "--source", in, "--points", "300", "--paths", "64", "--reference-albedo", "vertex",
+                 "--report", dir.path("x.json")}), 0);
+  testing::internal::GetCapturedStdout();
+  const std::string x = read_file_bytes(dir.path("x.json")), e = read_file_bytes(dir.path("c3.json"));
+  EXPECT_GT(test::json_number(x, "rms_percent"), 1.3 * test::json_number(e, "rms_percent"));
+  EXPECT_EQ(test::json_number(x, "noise_floor_percent"), test::json_number(e, "noise_floor_percent"));  // one reference
   // A map through the UVs: 2 by 2 pixels, 8-bit sRGB, decoded; the asset's albedo at a vertex is
   // the map there, and eval reads the map the asset names.
   Image map;
