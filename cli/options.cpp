@@ -60,7 +60,7 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--albedo", "A|R,G,B|vertex", "the surfaces' diffuse albedo for interreflection: grey A, linear R,G,B (coloured\n"
               "bounces: RGB transfer), or the input's vertex colours (sRGB, decoded) [default 0.8]", &albedo_);
   args.option("--albedo-map", "PATH", "the albedo from a diffuse texture through the input's UVs (8-bit images are sRGB,\n"
-              "decoded; EXR/HDR linear): coloured bounces, RGB transfer", &albedo_map_);
+              "decoded, 16-bit too; EXR/HDR linear): coloured bounces, RGB transfer", &albedo_map_);
   args.flag("--bounce-vertices-only", "interreflection: bounce at the vertices only, not also at the fit's samples before\n"
             "fitting again", &bounce_vertices_only_);
   args.choice("--bounce-cache", "interreflection: keep each ray's hit between passes (auto: while under 1 GiB)", &bake.bounce.cache,

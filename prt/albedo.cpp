@@ -7,7 +7,7 @@
 // each vertex for renderers that have no texture.
 //
 // Colours in files are display colours: vertex colours (PLY red/green/blue, OBJ `v x y z r g b`)
-// and 8-bit images are decoded from sRGB to linear (subdiv/mesh_io, image_io); float images
+// and 8- and 16-bit images are decoded from sRGB to linear (subdiv/mesh_io, image_io); float images
 // (EXR, HDR) are taken as linear.
 #include "prtsub/prt/albedo.h"
 
@@ -61,7 +61,7 @@ std::string albedo_description(const AlbedoSpec& s) {
   char buf[96];
   switch (s.source) {
     case AlbedoSource::Vertex: return "vertex colours (sRGB decoded to linear)";
-    case AlbedoSource::Map: return "map " + s.map + " (through the UVs; 8-bit sRGB decoded to linear)";
+    case AlbedoSource::Map: return "map " + s.map + " (through the UVs; 8- and 16-bit sRGB decoded to linear)";
     case AlbedoSource::Constant: break;
   }
   if (!s.coloured()) std::snprintf(buf, sizeof buf, "%.6g", s.constant.x());

@@ -46,9 +46,13 @@ Image read_image(const std::string& path) {
   img.pixels.resize(static_cast<size_t>(img.width) * img.height * img.channels);
   if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
     throw IoError(path + ": cannot read image pixels (" + in->geterror() + ")");
-  const bool eight_bit = spec.format == OIIO::TypeDesc::UINT8;
+  // Integer images (8- and 16-bit PNG, JPEG, TIFF) hold display-encoded sRGB unless the file says
+  // it is linear; float images (EXR, HDR) are linear.
+  const std::string space = spec.get_string_attribute("oiio:ColorSpace");
+  const bool linear_tag = space == "Linear" || space == "linear" || space == "lin_srgb" || space == "scene_linear";
+  const bool display = (spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16) && !linear_tag;
   in->close();
-  if (eight_bit) {
+  if (display) {
     for (size_t i = 0; i < img.pixels.size(); ++i)
       if (img.channels < 4 || i % 4 != 3) img.pixels[i] = static_cast<float>(srgb_to_linear(img.pixels[i]));
   }

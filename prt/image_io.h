@@ -9,7 +9,8 @@
 namespace prtsub {
 
 //! Reads any image OpenImageIO can (EXR, HDR, PNG, ...) as linear float, all channels.
-//! 8-bit formats are converted from sRGB to linear.
+//! 8- and 16-bit formats are converted from sRGB to linear (alpha kept), unless the file tags
+//! itself linear.
 //! \throw IoError if missing or unreadable, InputError if it has no pixels
 Image read_image(const std::string& path);
 
