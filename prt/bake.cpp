@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <cstdio>
 
 #include "prtsub/prt/closest_point.h"
@@ -263,6 +264,71 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
   for (size_t i = before; i < r.mesh.num_vertices() && i < signal.variance().size(); ++i)
     r.point_variance[i] = signal.variance()[i], r.vertex_rays[i] = o.transfer.rays;
   if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
+}
+
+// Refinement keyed on bounced light: each new vertex is traced for its direct transfer (the
+// signal underneath), and takes its edge's midpoint of the light the bounces added, so the queue
+// sees direct plus bounced transfer. The direct part is kept for the passes that follow.
+class BouncedSignal : public RefinementSignal {
+ public:
+  BouncedSignal(TransferSignal& direct_signal, RowMatrixXd direct, RowMatrixXd bounced)
+      : inner_(direct_signal), direct_(std::move(direct)), bounced_(std::move(bounced)) {}
+  void probe_faces(const std::vector<FaceProbe>& faces, std::vector<double>& extra) override { inner_.probe_faces(faces, extra); }
+  double edge_error(const EdgeView& edge) const override { return inner_.edge_error(edge); }
+  void compute_values(const std::vector<NewVertex>& batch, const RowMatrixXd& parent_values, RowMatrixXd& values) override {
+    inner_.compute_values(batch, parent_values, values);
+    if (batch.empty()) return;
+    const auto end = static_cast<Eigen::Index>(batch.back().index) + 1;
+    if (direct_.rows() < end) direct_.conservativeResize(end, Eigen::NoChange), bounced_.conservativeResize(end, Eigen::NoChange);
+    for (size_t i = 0; i < batch.size(); ++i) {
+      const auto v = static_cast<Eigen::Index>(batch[i].index), row = static_cast<Eigen::Index>(i);
+      direct_.row(v) = values.row(row);
+      bounced_.row(v) = 0.5 * (bounced_.row(batch[i].a) + bounced_.row(batch[i].b));
+      values.row(row) += bounced_.row(v);
+    }
+  }
+  const RowMatrixXd& direct() const { return direct_; }
+
+ private:
+  TransferSignal& inner_;
+  RowMatrixXd direct_, bounced_;  // per render vertex: traced direct transfer, and the bounces' light
+};
+
+// The scene a bounce needs: one holding r.mesh's own triangles in order (see the bounce stage).
+std::unique_ptr<RayScene> scene_for(const Mesh& mesh, const RayScene& scene, const BakeOptions& o) {
+  if (o.refine != Refinement::Adaptive && o.refine != Refinement::Auto) return nullptr;  // none or uniform: the scene is the mesh's
+  (void)scene;
+  return std::make_unique<RayScene>(mesh.positions, position_triangles(mesh));
+}
+
+void refine_rekeyed(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, BakeResult& r) {
+  BakeOptions first = o;
+  first.adaptive.budget = static_cast<size_t>(o.rekey_share * double(o.adaptive.budget));
+  if (first.adaptive.budget > r.mesh.num_faces()) refine_adaptively(scene, first, r);  // else all of it keyed on bounced light
+  if (progress.stage) progress.stage("bounces to key on", 0);
+  BounceOptions b = o.bounce;
+  b.until_converged = false, b.bounces = std::min(o.bounce.bounces, 16), b.colour = nullptr;
+  if (o.albedo_colour.coloured()) b.albedo = o.albedo_colour.constant.mean();  // a grey key (a map's or colours': their first use below)
+  BounceStats st;
+  const RayScene keyed_scene(r.mesh.positions, position_triangles(r.mesh));  // the bounces read its triangles
+  const RowMatrixXd total = interreflected_transfer(r.mesh, keyed_scene, r.transfer, b, &st);
+  r.rays += st.rays;
+  TransferSignalOptions so;
+  so.estimate = o.estimate;
+  so.transfer = o.transfer;
+  TransferSignal inner(scene, so);
+  BouncedSignal signal(inner, r.transfer, total - r.transfer);
+  RowMatrixXd values = total;
+  const size_t before = r.mesh.num_vertices();
+  const RefineStats second = refine_adaptive(r.mesh, values, signal, o.adaptive);
+  r.rays += inner.rays();
+  r.transfer = signal.direct().topRows(static_cast<Eigen::Index>(r.mesh.num_vertices()));
+  r.point_variance.resize(r.mesh.num_vertices(), 0.0);
+  r.vertex_rays.resize(r.mesh.num_vertices(), 0.0);
+  for (size_t i = before; i < r.mesh.num_vertices() && i < inner.variance().size(); ++i)
+    r.point_variance[i] = inner.variance()[i], r.vertex_rays[i] = o.transfer.rays;
+  r.refine.splits += second.splits, r.refine.new_vertices += second.new_vertices, r.refine.batches += second.batches;
+  if (!second.warning.empty()) r.warnings.push_back(second.warning);
 }
 
 // A budget below the input's: collapse where the transfer does not change. Surviving vertices
@@ -625,6 +691,8 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     if (o.adaptive.budget < r.mesh.num_faces()) {
       if (progress.stage) progress.stage("simplify", 0);
       simplify_adaptively(o, r, progress.add);
+    } else if (o.rekey_share > 0 && o.rekey_share < 1 && o.bounce.bounces > 0) {
+      refine_rekeyed(scene, o, progress, r);
     } else {
       refine_adaptively(scene, o, r);
     }
@@ -659,13 +727,18 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     }
     if (o.albedo_colour.coloured()) b.colour = std::make_shared<const AlbedoField>(r.mesh, o.albedo_colour);
     if (progress.stage) progress.stage("bounces", 0);
+    // A bounce reads the values of the triangle a ray hits, so the scene must hold the asset's own
+    // triangles: after adaptive refinement or simplification it is built again (visibility alone,
+    // as every stage before needed, does not care which triangles tile the surface).
+    const std::unique_ptr<RayScene> own = scene_for(r.mesh, scene, o);
+    const RayScene& bounce_scene = own ? *own : scene;
     RowMatrixXd before_last;
     const RowMatrixXd fitted = r.transfer;
-    r.transfer = interreflected_transfer(r.mesh, scene, fitted, b, &r.bounce, &before_last);
+    r.transfer = interreflected_transfer(r.mesh, bounce_scene, fitted, b, &r.bounce, &before_last);
     r.rays += r.bounce.rays;
     const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);  // else the samples lie on the input
     if (o.bounce.fit_samples && o.fit.method != FitMethod::Point && r.fit_data.samples.size() > 0 && on_own_samples && r.bounce.passes > 0)
-      fit_bounced_samples(scene, o, b, before_last, fitted, progress, r);
+      fit_bounced_samples(bounce_scene, o, b, before_last, fitted, progress, r);
     if (b.colour) r.albedo = b.colour->vertices();
     r.seconds_bounce = clock.lap();
   }

@@ -147,5 +147,49 @@ TEST(Interreflection, TheFitSeesBouncedLightUnlessAskedNotTo) {
   EXPECT_EQ(bake(mesh, o).bounce.sample_rays, 0u) << "no samples, nothing to gather at";
 }
 
+TEST(Interreflection, RefinementKeyedOnBouncedLightKeepsTheDirectTransferForThePasses) {
+  // --bounce-rekey: half the budget on direct light, the rest keyed on direct plus bounced. The
+  // point values the passes then bounce are direct transfer: the input's vertices trace exactly
+  // what a bake without the re-key traces, and the asset is the passes applied to them.
+  const Mesh mesh = test::build(test::merge(test::quad(2.0, 0.0, true), test::quad(1.0, 0.5, false)));
+  BakeOptions o;
+  o.transfer.order = 2, o.transfer.rays = 64;
+  o.refine = Refinement::Adaptive, o.adaptive.budget = 200;
+  o.bounce.bounces = 2;
+  o.fit.method = FitMethod::Point;
+  o.rekey_share = 0.5;
+  const BakeResult keyed = bake(mesh, o);
+  o.rekey_share = 0;
+  const BakeResult plain = bake(mesh, o);
+  EXPECT_EQ(keyed.mesh.num_faces(), 200u);
+  const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
+  EXPECT_EQ((keyed.point.topRows(V) - plain.point.topRows(V)).cwiseAbs().maxCoeff(), 0.0);
+  const RayScene scene(keyed.mesh.positions, position_triangles(keyed.mesh));
+  BounceOptions b = resolve_bake_options(o).bounce;
+  const RowMatrixXd again = interreflected_transfer(keyed.mesh, scene, keyed.point, b);
+  EXPECT_LT((again - keyed.transfer).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT((keyed.transfer - keyed.point).cwiseAbs().maxCoeff(), 0.01);  // the plate lights the ground
+  // Without the re-key too: the passes read the refined mesh's own triangles (the scene the bake
+  // traced its direct light in holds the input's, whose face numbers mean other triangles now).
+  const RayScene plain_scene(plain.mesh.positions, position_triangles(plain.mesh));
+  EXPECT_LT((interreflected_transfer(plain.mesh, plain_scene, plain.point, b) - plain.transfer).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(Interreflection, ASimplifiedMeshBouncesOnItsOwnTriangles) {
+  // Simplified below the input's count, the asset has fewer triangles than the input scene: a
+  // bounce must never read a face number of the input's in the asset's list.
+  const Mesh mesh = test::build(test::merge(test::icosphere(2), test::quad(3.0, -1.0, true)));
+  BakeOptions o;
+  o.transfer.order = 2, o.transfer.rays = 32;
+  o.refine = Refinement::Adaptive, o.adaptive.budget = 120;
+  o.bounce.bounces = 1;
+  o.fit.method = FitMethod::Point;
+  const BakeResult r = bake(mesh, o);
+  ASSERT_LT(r.mesh.num_faces(), mesh.num_faces());
+  const RayScene scene(r.mesh.positions, position_triangles(r.mesh));
+  const RowMatrixXd again = interreflected_transfer(r.mesh, scene, r.point, resolve_bake_options(o).bounce);
+  EXPECT_LT((again - r.transfer).cwiseAbs().maxCoeff(), 1e-12);
+}
+
 }  // namespace
 }  // namespace prtsub
