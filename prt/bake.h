@@ -97,6 +97,11 @@ struct BakeOptions {
   //! bounce.albedo's grey: the bounces then give RGB transfer (#V by 3·N²), and the asset records
   //! the albedo at every vertex. A grey constant (the default) leaves bounce.albedo in charge.
   AlbedoSpec albedo_colour;
+  //! Adaptive refinement with bounces: when in (0, 1), refine on direct transfer to this share of
+  //! the budget, bounce there, and refine the rest keyed on the bounced light (new vertices: their
+  //! traced direct transfer plus their edge's midpoint bounced light). 0: refine on direct
+  //! transfer only, and bounce after.
+  double rekey_share = 0;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
   //! Stop after refinement (or simplification): the mesh with its point-sampled vertex transfer,
   //! no samples, fit, error target or bounces. Such an asset is a mesh file that later bakes

@@ -67,7 +67,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s << "simplify " << simplify_metric_name(q.metric) << " " << q.geometry_weight << " " << q.min_angle_deg << " " << q.feature_tolerance << " "
     << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << "\n";
   s << "stage " << (o.refine_only ? "refine" : "all") << "\n";
-  s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << " " << o.bounce.fit_samples << "\n";
+  s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << " " << o.bounce.fit_samples << " rekey " << o.rekey_share << "\n";
   if (o.albedo_colour.coloured()) {  // a map is named and its bytes hashed: an edited texture bakes again
     s << "albedo " << albedo_description(o.albedo_colour);
     const std::string map_bytes = o.albedo_colour.source == AlbedoSource::Map ? read_file_bytes(o.albedo_colour.map) : std::string();
