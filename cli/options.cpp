@@ -62,7 +62,8 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--albedo-map", "PATH", "the albedo from a diffuse texture through the input's UVs (8-bit images are sRGB,\n"
               "decoded, 16-bit too; EXR/HDR linear): coloured bounces, RGB transfer", &albedo_map_);
   args.option("--bounce-rekey", "S", "adaptive refinement with bounces: refine on direct light to share S of the budget, bounce,\n"
-              "then refine the rest keyed on the bounced light (0: refine on direct light only) [default 0]", &bake.rekey_share, 0.0, 1.0);
+              "then refine the rest keyed on the bounced light, when S of the budget is above the input's\n"
+              "count (0: refine on direct light only) [default 0.5]", &bake.rekey_share, 0.0, 1.0);
   args.flag("--bounce-vertices-only", "interreflection: bounce at the vertices only, not also at the fit's samples before\n"
             "fitting again", &bounce_vertices_only_);
   args.choice("--bounce-cache", "interreflection: keep each ray's hit between passes (auto: while under 1 GiB)", &bake.bounce.cache,

@@ -200,6 +200,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   r.set("bounces", res.bounce.passes);
   r.set("channels", o.signal == AssetSignal::Ao ? 1 : std::max(transfer_channels(res.transfer.cols()), 1));
   if (o.albedo_colour.coloured()) r.set("albedo_source", albedo_description(o.albedo_colour));
+  r.set("bounce_rekeyed_at", res.rekeyed_at);
   if (res.bounce.passes > 0) {
     if (o.albedo_colour.coloured()) r.set("albedo", albedo_description(o.albedo_colour) + ", RGB transfer");
     else r.set("albedo", o.bounce.albedo);
@@ -304,6 +305,8 @@ void print_bake_summary(const Report& r) {
   if (r.number("bounces") > 0)
     r.print(stdout, {"  bounces:    {bounces} of interreflection, albedo {albedo}; the last added {bounce_change_percent:3}% of "
                      "||t_unshadowed|| ({bounce_rays} rays, {seconds_bounce:3} s)"});
+  if (r.number("bounce_rekeyed_at") > 0)
+    r.print(stdout, {"              refinement turned to keys on the bounced light at {bounce_rekeyed_at} triangles (--bounce-rekey)"});
   if (fit == "average")
     r.print(stdout, {"  fit:        average of {samples} surface samples ({sample_rays} rays each, {seconds_samples:3} s), averaged in "
                      "{seconds_fit:3} s"});

@@ -233,6 +233,8 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   }
   const bool coloured = o.albedo_colour.coloured();
   if (coloured) m.push_back({"albedo", albedo_description(o.albedo_colour)});
+  if (r.rekeyed_at > 0)
+    m.push_back({"bounce_rekey", std::to_string(r.rekeyed_at) + " (refined on direct light to this many triangles, then keyed on direct plus bounced light)"});
   if (r.bounce.passes > 0) {
     char buf[160];
     char grey[32];
@@ -304,7 +306,8 @@ std::unique_ptr<RayScene> scene_for(const Mesh& mesh, const RayScene& scene, con
 void refine_rekeyed(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, BakeResult& r) {
   BakeOptions first = o;
   first.adaptive.budget = static_cast<size_t>(o.rekey_share * double(o.adaptive.budget));
-  if (first.adaptive.budget > r.mesh.num_faces()) refine_adaptively(scene, first, r);  // else all of it keyed on bounced light
+  refine_adaptively(scene, first, r);
+  r.rekeyed_at = r.mesh.num_faces();
   if (progress.stage) progress.stage("bounces to key on", 0);
   BounceOptions b = o.bounce;
   b.until_converged = false, b.bounces = std::min(o.bounce.bounces, 16), b.colour = nullptr;
@@ -691,7 +694,8 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     if (o.adaptive.budget < r.mesh.num_faces()) {
       if (progress.stage) progress.stage("simplify", 0);
       simplify_adaptively(o, r, progress.add);
-    } else if (o.rekey_share > 0 && o.rekey_share < 1 && o.bounce.bounces > 0) {
+    } else if (o.rekey_share > 0 && o.rekey_share < 1 && o.bounce.bounces > 0 &&
+               static_cast<size_t>(o.rekey_share * double(o.adaptive.budget)) > r.mesh.num_faces()) {
       refine_rekeyed(scene, o, progress, r);
     } else {
       refine_adaptively(scene, o, r);

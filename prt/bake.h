@@ -99,9 +99,10 @@ struct BakeOptions {
   AlbedoSpec albedo_colour;
   //! Adaptive refinement with bounces: when in (0, 1), refine on direct transfer to this share of
   //! the budget, bounce there, and refine the rest keyed on the bounced light (new vertices: their
-  //! traced direct transfer plus their edge's midpoint bounced light). 0: refine on direct
-  //! transfer only, and bounce after.
-  double rekey_share = 0;
+  //! traced direct transfer plus their edge's midpoint bounced light); only when that share is
+  //! above the input's count (else it refines on direct transfer alone, measured no worse and
+  //! faster: BENCHMARKS.md). 0: refine on direct transfer only, and bounce after.
+  double rekey_share = 0.5;
   std::string source;  //!< recorded in the asset's metadata as "source" (a path, or any name)
   //! Stop after refinement (or simplification): the mesh with its point-sampled vertex transfer,
   //! no samples, fit, error target or bounces. Such an asset is a mesh file that later bakes
@@ -131,6 +132,7 @@ struct BakeResult {
   RowMatrixXd transfer;  //!< #V by N²: the asset's values (order-1 transfer for AO); #V by 3·N² when a coloured albedo bounced
   RowMatrixXd point;     //!< #V by N²: the point-sampled values (equal to transfer when fit is point)
   RowMatrixX3d albedo;   //!< #V by 3: the albedo at each vertex when it is coloured, else no rows
+  size_t rekeyed_at = 0;  //!< faces when refinement turned to keys on bounced light (0: it did not)
   std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
   RefineStats refine;    //!< adaptive refinement's counts and times
   bool simplified = false;     //!< the budget was below the input's: simplified, not refined

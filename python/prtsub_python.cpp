@@ -144,10 +144,11 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
       if (a.coloured()) o.albedo_colour = a;
       else o.bounce.albedo = a.constant.x();
     } else if (key == "albedo_map") o.albedo_colour = read_albedo_map(value.cast<std::string>());
+    else if (key == "bounce_rekey") o.rekey_share = value.cast<double>();
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, source)");
+                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");
