@@ -52,7 +52,11 @@ AlbedoSpec parse_albedo(const std::string& text) {
   std::stringstream in(text);
   for (std::string item; std::getline(in, item, ',');) items.push_back(item);
   if (items.size() == 1) s.constant.setConstant(parse_unit(items[0], text));
-  else if (items.size() == 3) s.constant << parse_unit(items[0], text), parse_unit(items[1], text), parse_unit(items[2], text);
+  else if (items.size() == 3) {
+    // Parsed before assigning: a throw inside Eigen's comma initializer would trip its assertion.
+    const double r = parse_unit(items[0], text), g = parse_unit(items[1], text), b = parse_unit(items[2], text);
+    s.constant = Eigen::Vector3d(r, g, b);
+  }
   else throw InputError("albedo '" + text + "': give one value A, three values R,G,B (linear) or vertex");
   return s;
 }
