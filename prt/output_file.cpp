@@ -1,15 +1,23 @@
-// Atomic outputs. A temporary file beside the target (same directory, so the rename is atomic)
-// receives the bytes through write(2), is synced and closed, every step checked, and is then
-// renamed over the target. While it exists its name sits in a fixed table of slots, which
-// remove_temporary_files() walks with only async-signal-safe calls (unlink), so that a signal
-// handler can clean up: the table is written before the file is created and cleared after the
-// rename. Character devices are written in place (there is nothing to rename over: /dev/null
-// must keep working, and /dev/full must say it is full); every other non-regular target is
-// refused, because renaming over it would replace it (as root, a device node) with a file.
+// Atomic outputs. The bytes go into a file beside the target (same directory, so the rename is
+// atomic) through write(2), are synced and closed, every step checked, and the file is then
+// renamed over the target.
+//
+// Where the filesystem allows (Linux's O_TMPFILE: ext4, xfs, btrfs, tmpfs), that file has no name
+// while it is written and synced: whatever stops the process then (a signal, SIGKILL, the OOM
+// killer, a crash) the kernel reclaims it and nothing is left. It is linked to a temporary name
+// only for the instant before the rename. Elsewhere it is a named temporary file from the start.
+// While a temporary name exists it sits in a fixed table of slots, which remove_temporary_files()
+// walks with only async-signal-safe calls (unlink), so that a signal handler can clean up: the
+// table is written before the name is created and cleared after the rename.
+//
+// Character devices are written in place (there is nothing to rename over: /dev/null must keep
+// working, and /dev/full must say it is full); every other non-regular target is refused, because
+// renaming over it would replace it (as root, a device node) with a file.
 #include "prtsub/prt/output_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/types.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -48,7 +56,9 @@ void release_slot(int slot) {
   if (slot >= 0) g_slots[slot].state.store(kFree);
 }
 
-std::string errno_text() { return std::strerror(errno); }
+std::string errno_text() {
+  return std::strerror(errno);
+}
 
 // Every byte through write(2), retried on EINTR and short writes.
 bool write_all(int fd, const std::string& bytes) {
@@ -71,7 +81,8 @@ std::string temporary_name(const std::string& path) {
   const size_t slash = path.rfind('/');
   const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
   const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  return dir + "." + name + ".prtsub-tmp." + std::to_string(::getpid()) + "." + std::to_string(g_counter++);
+  return dir + "." + name + ".prtsub-tmp." + std::to_string(::getpid()) + "." +
+         std::to_string(g_counter++);
 }
 
 // What kind of target this is: 0 none yet, 1 regular file, 2 character device; IoError otherwise.
@@ -83,8 +94,11 @@ int target_kind(const std::string& path) {
   }
   if (S_ISREG(st.st_mode)) return 1;
   if (S_ISCHR(st.st_mode)) return 2;
-  const char* what = S_ISDIR(st.st_mode) ? "a directory" : S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket"
-                     : S_ISBLK(st.st_mode) ? "a block device" : "not a regular file";
+  const char* what = S_ISDIR(st.st_mode)    ? "a directory"
+                     : S_ISFIFO(st.st_mode) ? "a FIFO"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                     : S_ISBLK(st.st_mode)  ? "a block device"
+                                            : "not a regular file";
   throw IoError(path + ": refusing to write output over " + std::string(what));
 }
 
@@ -93,8 +107,44 @@ void write_in_place(const std::string& path, const std::string& bytes) {
   if (fd < 0) throw IoError(path + ": cannot open output device (" + errno_text() + ")");
   const bool written = write_all(fd, bytes);
   const std::string reason = written ? "" : errno_text();
-  if (::close(fd) != 0 && written) throw IoError(path + ": write failed on close (" + errno_text() + ")");
+  if (::close(fd) != 0 && written)
+    throw IoError(path + ": write failed on close (" + errno_text() + ")");
   if (!written) throw IoError(path + ": write failed (" + reason + ")");
+}
+
+// An unnamed file in the target's directory (O_TMPFILE), or -1 where the filesystem or kernel has
+// none: the caller then creates a named temporary file instead.
+int open_unnamed(const std::string& path) {
+#ifdef O_TMPFILE
+  const int fd = ::open(directory_of(path).c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+  if (fd >= 0) return fd;
+#else
+  (void)path;
+#endif
+  return -1;
+}
+
+// Gives the unnamed file `fd` the name `tmp`: by its descriptor where the process may (root), else
+// through /proc/self/fd. False if neither works (no /proc, say): the caller falls back.
+bool link_unnamed(int fd, const std::string& tmp) {
+#ifdef AT_EMPTY_PATH
+  if (::linkat(fd, "", AT_FDCWD, tmp.c_str(), AT_EMPTY_PATH) == 0) return true;
+#endif
+  const std::string proc = "/proc/self/fd/" + std::to_string(fd);
+  return ::linkat(AT_FDCWD, proc.c_str(), AT_FDCWD, tmp.c_str(), AT_SYMLINK_FOLLOW) == 0;
+}
+
+// Writes and syncs fd. On failure: closes it and sets `what` and `reason`.
+bool write_and_sync(int fd, const std::string& bytes, std::string& what, std::string& reason) {
+  if (!write_all(fd, bytes))
+    what = "write failed";
+  else if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS)
+    what = "write failed on sync";
+  else
+    return true;
+  reason = errno_text();
+  ::close(fd);
+  return false;
 }
 
 }  // namespace
@@ -107,29 +157,38 @@ void remove_temporary_files() {
 void write_file_atomically(const std::string& path, const std::string& bytes) {
   if (target_kind(path) == 2) return write_in_place(path, bytes);
   const std::string tmp = temporary_name(path);
-  const int slot = claim_slot(tmp);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-  if (fd < 0) {
-    const std::string reason = errno_text();
-    release_slot(slot);
-    throw IoError(path + ": cannot create output file (" + reason + ")");
-  }
-  auto fail = [&](const std::string& what) {
-    const std::string reason = errno_text();
+  std::string what, reason;
+  auto fail = [&](int slot, const std::string& step) {
+    if (reason.empty()) reason = errno_text();
     ::unlink(tmp.c_str());
     release_slot(slot);
-    throw IoError(path + ": " + what + " (" + reason + ")");
+    throw IoError(path + ": " + (what.empty() ? step : what) + " (" + reason + ")");
   };
-  if (!write_all(fd, bytes)) {
-    ::close(fd);
-    fail("write failed");
+  int fd = open_unnamed(path);
+  int slot = -1;
+  if (fd >= 0) {
+    // Written and synced with no name: nothing can be left behind until the link below.
+    if (!write_and_sync(fd, bytes, what, reason))
+      throw IoError(path + ": " + what + " (" + reason + ")");
+    slot = claim_slot(tmp);
+    if (!link_unnamed(fd, tmp)) {  // no way to name it: write a named file instead
+      ::close(fd);
+      release_slot(slot);
+      fd = -1;
+    }
   }
-  if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
-    ::close(fd);
-    fail("write failed on sync");
+  if (fd < 0) {
+    slot = claim_slot(tmp);
+    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) {
+      reason = errno_text();
+      release_slot(slot);
+      throw IoError(path + ": cannot create output file (" + reason + ")");
+    }
+    if (!write_and_sync(fd, bytes, what, reason)) fail(slot, what);
   }
-  if (::close(fd) != 0) fail("write failed on close");
-  if (::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot move output into place");
+  if (::close(fd) != 0) fail(slot, "write failed on close");
+  if (::rename(tmp.c_str(), path.c_str()) != 0) fail(slot, "cannot move output into place");
   release_slot(slot);
 }
 
@@ -143,11 +202,19 @@ void check_output_path(const std::string& path) {
   }
   // A new file must be creatable beside the target, where the temporary one will go.
   const std::string probe = temporary_name(path);
+  const int slot = claim_slot(probe);  // a signal between the open and the unlink removes it too
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-  if (fd < 0) throw IoError(path + ": cannot create output file in " + directory_of(path) + " (" + errno_text() + ")");
+  if (fd < 0) {
+    const std::string reason = errno_text();
+    release_slot(slot);
+    throw IoError(path + ": cannot create output file in " + directory_of(path) + " (" + reason +
+                  ")");
+  }
   ::close(fd);
   ::unlink(probe.c_str());
-  if (kind == 1 && ::access(path.c_str(), F_OK) != 0) throw IoError(path + ": output file vanished");
+  release_slot(slot);
+  if (kind == 1 && ::access(path.c_str(), F_OK) != 0)
+    throw IoError(path + ": output file vanished");
 }
 
 }  // namespace prtsub

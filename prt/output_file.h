@@ -7,10 +7,13 @@
 namespace prtsub {
 
 //! Writes `bytes` to `path`:
-//!  - a regular file, or a new one: into a temporary file beside it, named
-//!    ".NAME.prtsub-tmp.PID.N", then renamed over it. Every write, sync and close is checked (a
-//!    full disk is an IoError naming the file), and the temporary file is removed on every
-//!    error, and by remove_temporary_files() when a signal stops the process;
+//!  - a regular file, or a new one: into a file beside it, then renamed over it. Where the
+//!    filesystem has O_TMPFILE (ext4, xfs, btrfs, tmpfs) that file has no name while it is
+//!    written and synced, so nothing is left whatever stops the process (even SIGKILL); it is
+//!    named ".NAME.prtsub-tmp.PID.N" only for the rename (elsewhere, from the start). Every
+//!    write, sync and close is checked (a full disk is an IoError naming the file), and the
+//!    temporary name is removed on every error, and by remove_temporary_files() when a signal
+//!    stops the process;
 //!  - a character device (/dev/null, a terminal): written in place, every error checked (so a
 //!    full device is reported, not hidden);
 //!  - anything else that exists (a directory, FIFO, socket or block device): refused, untouched.

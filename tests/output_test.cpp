@@ -1,8 +1,7 @@
 // Outputs never clobber what they should not, a failed write is an error, and a stopped run
 // leaves its old outputs intact with no temporary file behind. Devices are made by the test in
 // its own directory (mknod, as root; skipped otherwise), never the machine's /dev.
-#include "prtsub/prt/output_file.h"
-
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -12,12 +11,13 @@
 
 #include <chrono>
 #include <csignal>
-#include <functional>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 
 #include "cli_helpers.h"
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/output_file.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/ply.h"
 
@@ -26,7 +26,8 @@ namespace {
 
 size_t temporary_files(const std::string& dir) {
   size_t n = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir)) n += e.path().filename().string().find(".prtsub-tmp.") != std::string::npos;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    n += e.path().filename().string().find(".prtsub-tmp.") != std::string::npos;
   return n;
 }
 
@@ -42,10 +43,13 @@ std::string error_of(const std::function<void()>& f) {
 TEST(Output, AFullDeviceIsReportedAndNeverReplaced) {
   test::TempDir dir;
   const std::string full = dir.path("full"), null = dir.path("null");
-  if (::mknod(full.c_str(), S_IFCHR | 0666, makedev(1, 7)) != 0 || ::mknod(null.c_str(), S_IFCHR | 0666, makedev(1, 3)) != 0)
+  if (::mknod(full.c_str(), S_IFCHR | 0666, makedev(1, 7)) != 0 ||
+      ::mknod(null.c_str(), S_IFCHR | 0666, makedev(1, 3)) != 0)
     GTEST_SKIP() << "mknod needs root (it has it in CI)";
   // A full device: the write fails and says so; the node stays a node.
-  EXPECT_NE(error_of([&] { write_file_atomically(full, std::string(100000, 'x')); }).find(full + ": write failed (No space left on device)"),
+  EXPECT_NE(error_of([&] {
+              write_file_atomically(full, std::string(100000, 'x'));
+            }).find(full + ": write failed (No space left on device)"),
             std::string::npos);
   struct stat st {};
   ASSERT_EQ(::stat(full.c_str(), &st), 0);
@@ -60,12 +64,16 @@ TEST(Output, AFullDeviceIsReportedAndNeverReplaced) {
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
   EXPECT_EQ(test::run_prtsub({"bake", mesh, "-o", full, "--rays", "4"}), 1);
-  EXPECT_EQ(test::run_prtsub({"bake", mesh, "-o", dir.path("a.ply"), "--rays", "4", "--report", full}), 1);
+  EXPECT_EQ(
+      test::run_prtsub({"bake", mesh, "-o", dir.path("a.ply"), "--rays", "4", "--report", full}),
+      1);
   EXPECT_EQ(test::run_prtsub({"bake", mesh, "-o", null, "--rays", "4", "--report", null}), 0);
   testing::internal::GetCapturedStdout();
   const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_EQ(err, "prtsub: error: " + full + ": write failed (No space left on device)\n"
-                 "prtsub: error: " + full + ": write failed (No space left on device)\n");
+  EXPECT_EQ(err, "prtsub: error: " + full +
+                     ": write failed (No space left on device)\n"
+                     "prtsub: error: " +
+                     full + ": write failed (No space left on device)\n");
   ASSERT_EQ(::stat(full.c_str(), &st), 0);
   EXPECT_TRUE(S_ISCHR(st.st_mode));
   EXPECT_EQ(temporary_files(dir.path("")), 0u);
@@ -76,16 +84,22 @@ TEST(Output, FifosSocketsAndDirectoriesAreRefusedUntouched) {
   const std::string fifo = dir.path("fifo"), sub = dir.path("sub");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0666), 0);
   std::filesystem::create_directory(sub);
-  EXPECT_EQ(error_of([&] { write_file_atomically(fifo, "x"); }), fifo + ": refusing to write output over a FIFO");
-  EXPECT_EQ(error_of([&] { check_output_path(fifo); }), fifo + ": refusing to write output over a FIFO");
-  EXPECT_EQ(error_of([&] { write_file_atomically(sub, "x"); }), sub + ": refusing to write output over a directory");
+  EXPECT_EQ(error_of([&] { write_file_atomically(fifo, "x"); }),
+            fifo + ": refusing to write output over a FIFO");
+  EXPECT_EQ(error_of([&] { check_output_path(fifo); }),
+            fifo + ": refusing to write output over a FIFO");
+  EXPECT_EQ(error_of([&] { write_file_atomically(sub, "x"); }),
+            sub + ": refusing to write output over a directory");
   struct stat st {};
   ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
   EXPECT_TRUE(S_ISFIFO(st.st_mode));
   EXPECT_TRUE(std::filesystem::is_directory(sub));
   EXPECT_EQ(temporary_files(dir.path("")), 0u);
   // A missing directory is caught before any work.
-  EXPECT_NE(error_of([&] { check_output_path(dir.path("no/such/a.ply")); }).find("cannot create output file in"), std::string::npos);
+  EXPECT_NE(error_of([&] {
+              check_output_path(dir.path("no/such/a.ply"));
+            }).find("cannot create output file in"),
+            std::string::npos);
 }
 
 TEST(Output, AWriteThatFailsHalfWayLeavesTheOldFileAndNoTemporary) {
@@ -107,14 +121,15 @@ TEST(Output, AWriteThatFailsHalfWayLeavesTheOldFileAndNoTemporary) {
   EXPECT_EQ(temporary_files(dir.path("")), 0u);
 }
 
-TEST(Output, ABakeStoppedAtAnyMomentLeavesTheOldOutputOrTheWholeNewOne) {
-  // The tool itself, stopped by SIGTERM at moments spread over its run (which ends with the
-  // write of a 4 MB asset: 10,242 vertices of 100 float coefficients): each time, out.ply is the old file or a complete asset, and no
-  // temporary file is left.
+// The tool itself, stopped by `signal` at moments spread over its run (which ends with the write
+// of a 4 MB asset: 10,242 vertices of 100 float coefficients): each time, out.ply is the old file
+// or a complete asset, and no temporary file is left.
+void stop_bakes_at_moments_spread_over_the_run(const std::string& signal) {
   test::TempDir dir;
   const std::string mesh = dir.path("big.obj"), out = dir.path("out.ply");
   test::write_obj(mesh, test::icosphere(5));
-  const std::string bake = std::string(PRTSUB_BINARY) + " bake " + mesh + " -o " + out + " --order 10 --rays 1 --fit point > /dev/null 2>&1";
+  const std::string bake = std::string(PRTSUB_BINARY) + " bake " + mesh + " -o " + out +
+                           " --order 10 --rays 1 --fit point > /dev/null 2>&1";
   const auto t0 = std::chrono::steady_clock::now();
   ASSERT_EQ(std::system(bake.c_str()), 0);
   const double whole = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -123,14 +138,40 @@ TEST(Output, ABakeStoppedAtAnyMomentLeavesTheOldOutputOrTheWholeNewOne) {
   for (int i = 0; i < 8; ++i) {
     test::write_text(out, "OLD");
     const double at = whole * (0.3 + 0.7 * i / 7.0);
-    const int status = std::system(("timeout -s TERM " + std::to_string(at) + " " + bake).c_str());
+    const int status =
+        std::system(("timeout -s " + signal + " " + std::to_string(at) + " " + bake).c_str());
     const std::string bytes = read_file_bytes(out);
-    if (bytes == "OLD") ++stopped;
-    else EXPECT_EQ(read_asset(out).triangles.size(), triangles) << "stopped at " << at << " s (status " << status << ")";
+    if (bytes == "OLD")
+      ++stopped;
+    else
+      EXPECT_EQ(read_asset(out).triangles.size(), triangles)
+          << "stopped at " << at << " s (status " << status << ")";
     finished += bytes != "OLD";
-    EXPECT_EQ(temporary_files(dir.path("")), 0u) << "stopped at " << at << " s";
+    EXPECT_EQ(temporary_files(dir.path("")), 0u)
+        << "stopped by SIG" << signal << " at " << at << " s";
   }
-  std::printf("whole run %.2f s; %d runs stopped with the old file in place, %d finished\n", whole, stopped, finished);
+  std::printf("SIG%s: whole run %.2f s; %d runs stopped with the old file in place, %d finished\n",
+              signal.c_str(), whole, stopped, finished);
+}
+
+TEST(Output, ABakeStoppedAtAnyMomentLeavesTheOldOutputOrTheWholeNewOne) {
+  stop_bakes_at_moments_spread_over_the_run("TERM");
+}
+
+TEST(Output, ABakeKilledOutrightLeavesNoTemporaryWhereTheFilesystemHasUnnamedFiles) {
+  // SIGKILL runs no handler: only a file with no name while it is written leaves nothing behind.
+  test::TempDir dir;
+#ifdef O_TMPFILE
+  const int fd = ::open(dir.path("").c_str(), O_TMPFILE | O_WRONLY, 0600);
+#else
+  const int fd = -1;
+#endif
+  if (fd < 0)
+    GTEST_SKIP()
+        << dir.path("")
+        << ": this filesystem has no O_TMPFILE, so a killed write leaves its temporary file";
+  ::close(fd);
+  stop_bakes_at_moments_spread_over_the_run("KILL");
 }
 
 }  // namespace
