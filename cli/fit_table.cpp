@@ -26,10 +26,11 @@ struct Column {
 };
 
 // The paper's four columns use its plain estimators, E(α) at its recommended α = 0.1; "default"
-// is the requested options as the bake runs them (noise weighting and the non-negative limit).
+// is the requested options as the bake runs them (noise weighting, the non-negative limit and the
+// unshadowed part's exact projection).
 std::vector<Column> fit_columns(const FitOptions& requested) {
   FitOptions plain = requested;
-  plain.weigh_by_noise = false, plain.non_negative = NonNegative::Off;
+  plain.weigh_by_noise = false, plain.non_negative = NonNegative::Off, plain.unshadowed_order = 0;
   std::vector<Column> columns(5);
   columns[0].name = "point", columns[0].label = "E_point", columns[0].options.method = FitMethod::Point;
   columns[1].name = "avg", columns[1].label = "E_avg", columns[1].options.method = FitMethod::Average;

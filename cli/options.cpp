@@ -81,6 +81,8 @@ void BakeCli::add_fit(ArgParser& args) {
               &f.cg_tolerance, 1e-16, 1.0);
   args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"
             "variate (for comparison; noisier)", &no_control_variate_);
+  args.flag("--no-unshadowed-projection", "lsq, transfer: interpolate the unshadowed part t_u(n) from the vertices as\n"
+            "point values do, instead of projecting it exactly (for comparison)", &no_unshadowed_projection_);
   args.flag("--no-noise-weighting", "lsq: keep the whole fit everywhere instead of weighing its correction against the point\n"
             "samples by their noise", &no_noise_weighting_);
   args.choice("--non-negative", "lsq: keep the fit from negative radiance under constant lights (the DC coefficient), also\n"
@@ -186,6 +188,7 @@ BakeOptions BakeCli::options() const {
   o.bounce.fit_samples = !bounce_vertices_only_;
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;
+  o.unshadowed_projection = !no_unshadowed_projection_;
   o.source = input;
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw UsageError(std::string("--budget: required with --refine ") + refinement_name(o.refine));

@@ -124,6 +124,9 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("seconds_fit_solve", f.seconds_solve);
   r.set("noise_weighting", o.weigh_by_noise);
   r.set("kept_correction", f.kept_correction);
+  r.set("fit_unshadowed_projection", o.unshadowed_order > 0);
+  r.set("fit_unshadowed_iterations", f.unshadowed_iterations);
+  r.set("seconds_fit_unshadowed", f.seconds_unshadowed);
   r.set("non_negative", non_negative_name(o.non_negative));
   r.set("non_negative_limited_vertices", f.limited_vertices);
 }
@@ -330,6 +333,9 @@ void print_bake_summary(const Report& r) {
                             .c_str());
     r.print(stdout, {"              weighed by noise: {kept_correction:%1} of the fit's correction kept on average; non-negative "
                      "({non_negative}): {non_negative_limited_vertices} vertices limited"});
+    if (r.number("fit_unshadowed_iterations") > 0)
+      r.print(stdout, {"              unshadowed curvature projected exactly onto the mesh ({fit_unshadowed_iterations} CG passes, "
+                       "{seconds_fit_unshadowed:3} s, no rays)"});
   }
   if (r.has("predicted_error_percent"))
     r.print(stdout, {"  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "

@@ -146,6 +146,9 @@ BakeOptions resolve_bake_options(const BakeOptions& in) {
   o.samples.seed = mix64(o.transfer.seed + 17);
   o.fit.threads = o.transfer.threads;
   o.bounce.rays = o.transfer.rays, o.bounce.seed = o.transfer.seed, o.bounce.threads = o.transfer.threads;
+  const bool unshadowed = o.unshadowed_projection && o.signal == AssetSignal::Transfer && o.fit.method == FitMethod::LeastSquares;
+  o.fit.unshadowed_order = unshadowed ? o.transfer.order : 0;
+  o.pilot.exact_unshadowed = unshadowed;
   return o;
 }
 
@@ -229,6 +232,9 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"regularizer", regularizer_name(o.fit.regularizer)});
     m.push_back({"mass", mass_matrix_name(o.fit.mass)});
     m.push_back({"noise_weighting", o.fit.weigh_by_noise ? "on" : "off"});
+    if (o.fit.unshadowed_order > 0 && !(r.simplified && r.simplify.collapses > 0))
+      m.push_back({"unshadowed", "projected: the curvature of t_u(n) (the clamped cosine at the interpolated normal) inside the faces, "
+                                 "scaled by each vertex's open share, is fitted in closed form"});
     m.push_back({"non_negative", non_negative_name(o.fit.non_negative)});
   }
   const bool coloured = o.albedo_colour.coloured();
@@ -443,6 +449,8 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   // noise as it is (sibenik: 2.771% against 2.793% without noise weighing; docs/simplification.md).
   const bool both_ways = o.refine == Refinement::Auto && r.refine.splits > 0;  // (when it only simplified, as a simplification)
   fo.alpha = both_ways ? o.fit.alpha : o.simplified_alpha;
+  // The samples lie on the input, whose normals are not the asset's: t_u is not known there.
+  fo.unshadowed_order = 0;
   r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, fo, &r.fit, both_ways ? &r.point_variance : nullptr);
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
@@ -673,6 +681,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     if (progress.stage) progress.stage("order", 0);
     r.order = choose_order(scene, vertex_positions(r.mesh), r.mesh.normals, offsets, o.transfer, o.order_choice);
     o.transfer.order = r.order.order;
+    o = resolve_bake_options(o);  // the fit's known part at the chosen order
     r.rays += r.order.rays;
     clock.lap();
   }

@@ -89,6 +89,12 @@ struct BakeOptions {
   double target_error = 0;
   //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
   int sample_rays = 16;
+  //! Transfer with the least-squares fit: the curvature of the unshadowed part t_u(n) inside the
+  //! faces, known in closed form, is projected exactly onto the mesh instead of left to
+  //! interpolation, and the pilot looks for samples' work only in what is left (FitOptions::
+  //! unshadowed_order, PilotOptions::exact_unshadowed; docs/fit.md). No rays: on dense scans most
+  //! of what interpolation misses is that curvature.
+  bool unshadowed_projection = true;
   //! Interreflection (transfer only): bounces, albedo, the cache; its rays, seed and threads are
   //! the transfer's. Applied to the asset's values after the fit (refinement and the fit see
   //! direct transfer).

@@ -65,6 +65,7 @@
 #include "prtsub/prt/block_cg.h"
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/unshadowed_projection.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/random.h"
@@ -976,12 +977,40 @@ size_t keep_non_negative(const RowMatrixXd& prior, RowMatrixXd& x, NonNegative m
 
 }  // namespace
 
+namespace {
+
+// The prior corrected by the known part's exact projection: point values + P(w·t_u) − w·t_u(n),
+// w each vertex's open share (t_u's curvature in n shows in t as far as the point is open; an
+// enclosed region's t is near zero and near linear). The fit then runs as ever around it: a
+// vertex no sampled face touches keeps the corrected value, faces left to interpolation take its
+// interpolant as their data, and the regulariser sees the whole signal.
+RowMatrixXd corrected_prior(const Mesh& mesh, const RowMatrixXd& prior, const FitOptions& o, FitStats& stats) {
+  const Eigen::Index K = prior.cols(), N2 = sh_count(o.unshadowed_order);
+  if (K % N2 != 0 || K / N2 > 3 || prior.rows() != static_cast<Eigen::Index>(mesh.num_vertices()))
+    throw InputError("fit: the prior is not shadowed transfer of order " + std::to_string(o.unshadowed_order) + " at every vertex");
+  const Stopwatch clock;
+  UnshadowedProjectionOptions po;
+  po.threads = o.threads;
+  UnshadowedProjectionStats ps;
+  const std::vector<double> open = open_share(prior);
+  RowMatrixXd correction = unshadowed_projection(mesh, o.unshadowed_order, po, &ps, &open);
+  const RowMatrixXd at_vertices = unshadowed_at(mesh.normals, o.unshadowed_order);
+  for (Eigen::Index i = 0; i < correction.rows(); ++i) correction.row(i) -= open[static_cast<size_t>(i)] * at_vertices.row(i);
+  stats.unshadowed_iterations = ps.iterations, stats.seconds_unshadowed = clock.total();
+  return prior + correction.replicate(1, K / N2);
+}
+
+}  // namespace
+
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments,
-                              const RowMatrixXd& prior, const FitOptions& o, FitStats* stats_out,
+                              const RowMatrixXd& given_prior, const FitOptions& o, FitStats* stats_out,
                               const std::vector<double>* prior_variance) {
   // The least-squares path checks its inputs in assemble_fit_system; the others here.
-  if (o.method != FitMethod::LeastSquares) check_fit_inputs(mesh, s, moments, prior, o);
+  if (o.method != FitMethod::LeastSquares) check_fit_inputs(mesh, s, moments, given_prior, o);
   FitStats stats;
+  const bool known = o.method == FitMethod::LeastSquares && o.unshadowed_order > 0;
+  const RowMatrixXd corrected = known ? corrected_prior(mesh, given_prior, o, stats) : RowMatrixXd();
+  const RowMatrixXd& prior = known ? corrected : given_prior;
   stats.unknowns = mesh.num_vertices();
   RowMatrixXd x;
   if (o.method == FitMethod::Point) {

@@ -59,6 +59,11 @@ struct FitOptions {
   //! (a shadow inside a face), the fit does. Needs the moments' and the prior's variances.
   bool weigh_by_noise = true;
   NonNegative non_negative = NonNegative::Constant;
+  //! LeastSquares on shadowed SH transfer of this order (values of channels × order² columns;
+  //! 0: any other signal). t_u(n)'s curvature in the normal, as far as each point is open, is then
+  //! known: the prior is corrected by its exact projection, P(w·t_u) − w·t_u(n_i) with w the
+  //! vertex's open share (unshadowed_projection), before the fit runs around it (docs/fit.md).
+  int unshadowed_order = 0;
 };
 
 struct FitStats {
@@ -78,6 +83,9 @@ struct FitStats {
   //! weigh_by_noise: the mean share of the fit's correction kept (1: the fit, 0: the prior)
   double kept_correction = 1;
   size_t limited_vertices = 0;     //!< non_negative: vertices whose values it changed
+  //! unshadowed_order: the exact projection's CG passes and seconds (0 when it did not run)
+  int unshadowed_iterations = 0;
+  double seconds_unshadowed = 0;
   std::string warning;             //!< non-empty when the fallback was used
 };
 

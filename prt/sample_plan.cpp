@@ -37,7 +37,9 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "prtsub/prt/parallel.h"
+#include "prtsub/prt/sh.h"
 #include "prtsub/prt/trace_log.h"
+#include "prtsub/prt/unshadowed_projection.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/stopwatch.h"
@@ -78,6 +80,15 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   const size_t S = pilot.size();
   const Eigen::Index K = prior.cols();
   if (rays.order * rays.order != K) throw InputError("sample plan: the prior's columns do not match the SH order");
+  // Compared: what is left after the known part w·t_u (the fit's), when the fit projects it exactly.
+  const std::vector<double> open = o.exact_unshadowed ? open_share(prior) : std::vector<double>();
+  RowMatrixXd residual_prior;
+  if (o.exact_unshadowed) {
+    residual_prior = unshadowed_at(mesh.normals, rays.order);
+    for (Eigen::Index i = 0; i < residual_prior.rows(); ++i) residual_prior.row(i) *= -open[static_cast<size_t>(i)];
+    residual_prior += prior;
+  }
+  const RowMatrixXd& compared = o.exact_unshadowed ? residual_prior : prior;
 
   // The samples of the first stage: every one, or a systematic share of them (by index, so
   // spread over the faces in order) when the pilot runs in two stages.
@@ -125,7 +136,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     shadowed_transfer_groups(
         scene, all ? pilot.points : points, all ? pilot.normals : normals, group_begin, stage,
         [&](size_t g, const double* values, const double* variance, size_t rows) {
-          Eigen::VectorXd r(K);
+          Eigen::VectorXd r(K), known(K);
           for (size_t i = 0; i < rows; ++i) {
             const size_t j = group_begin[g] + i, k = which[j];
             if (keep_holdout && stride > 0 && j % stride == 0) {  // rows of distinct samples: no two threads share one
@@ -137,9 +148,14 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
             const Triangle& t = mesh.triangles[pilot.face[k]];
             double v = variance[i];
             for (Eigen::Index q = 0; q < K; ++q) r[q] = values[i * size_t(K) + size_t(q)];
+            if (o.exact_unshadowed) {
+              const auto kk = static_cast<Eigen::Index>(k);
+              unshadowed_transfer(rays.order, pilot.normals.row(kk).transpose(), known.data());
+              r -= (pilot.barycentric(kk, 0) * open[t[0]] + pilot.barycentric(kk, 1) * open[t[1]] + pilot.barycentric(kk, 2) * open[t[2]]) * known;
+            }
             for (int c = 0; c < 3; ++c) {
               const double h = pilot.barycentric(static_cast<Eigen::Index>(k), c);
-              r -= h * prior.row(t[c]).transpose();
+              r -= h * compared.row(t[c]).transpose();
               v += h * h * prior_variance[t[c]];
             }
             noise[k] = v;

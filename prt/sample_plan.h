@@ -45,6 +45,11 @@ struct PilotOptions {
   //! a mesh that interpolation already serves costs little more than its first stage.
   double first_share = 0.5;
   double first_significance = 1;
+  //! The values are shadowed transfer whose unshadowed curvature the fit projects exactly
+  //! (FitOptions::unshadowed_order): test what is left after the known part w·t_u(n) (w the open
+  //! share, interpolated), so that a face is sampled for a shadow inside it, not for the curvature
+  //! of t_u that needs no rays.
+  bool exact_unshadowed = false;
 };
 
 //! A systematic subset of the pilot's samples, kept with their traced values: a hold-out set,

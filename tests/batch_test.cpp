@@ -54,6 +54,7 @@ TEST(Batch, TheKeyChangesWithEveryOptionThatChangesTheAssetAndNotWithThreads) {
       {"cg_tolerance", [](BatchOptions& o) { o.bake.fit.cg_tolerance = 1e-8; }},
       {"cg_max_iterations", [](BatchOptions& o) { o.bake.fit.cg_max_iterations = 50; }},
       {"weigh_by_noise", [](BatchOptions& o) { o.bake.fit.weigh_by_noise = false; }},
+      {"unshadowed_projection", [](BatchOptions& o) { o.bake.unshadowed_projection = false; }},
       {"non_negative", [](BatchOptions& o) { o.bake.fit.non_negative = NonNegative::Off; }},
       {"per_triangle", [](BatchOptions& o) { o.bake.samples.per_triangle = 8; }},
       {"density", [](BatchOptions& o) { o.bake.samples.density = 3; }},

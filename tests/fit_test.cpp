@@ -1,4 +1,5 @@
 #include "prtsub/prt/fit.h"
+#include "prtsub/prt/unshadowed_projection.h"
 
 #include <gtest/gtest.h>
 
@@ -848,6 +849,39 @@ TEST(FitNonNegative, DirectionsKeepTheTransferFunctionAboveThePriorsMinimum) {
   }
   EXPECT_TRUE(plain_went_below);  // without the limit the bound is broken: the test has power
   EXPECT_GE(x.col(0).minCoeff(), 0.0);
+}
+
+}  // namespace
+}  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+TEST(Fit, TheUnshadowedCorrectionFollowsEachVertexsOpenShareWhereNoSampleReachesIt) {
+  // No face sampled: every vertex keeps its prior, corrected by the known part's projection,
+  // P(w·t_u) − w·t_u(n), w its open share (DC against an open point's). For a prior of s·t_u at
+  // every vertex, w = s and the projection is linear: the values are s·P(t_u), exactly.
+  const Mesh m = test::build(test::icosphere(2));
+  SampleOptions so;
+  so.per_triangle = 4;
+  const SurfaceSamples s = make_surface_samples(m, so, std::vector<double>(m.num_faces(), 0.0));
+  const FaceMoments moments{RowMatrixXd::Zero(3 * Eigen::Index(m.num_faces()), 16), {}};
+  FitOptions o;
+  o.unshadowed_order = 4;
+  const RowMatrixXd t_u = unshadowed_at(m.normals, 4), projected = unshadowed_projection(m, 4);
+  for (double share : {1.0, 0.5, 0.0}) {
+    FitStats st;
+    const RowMatrixXd x = fit_vertex_values(m, s, moments, share * t_u, o, &st);
+    EXPECT_LT((x - share * projected).cwiseAbs().maxCoeff(), 1e-12 * projected.cwiseAbs().maxCoeff()) << "share " << share;
+    EXPECT_EQ(st.unshadowed_iterations > 0, share > 0);  // nothing open, nothing to project
+  }
+  // RGB transfer (three blocks of 16): each channel corrected alike.
+  const RowMatrixXd rgb = fit_vertex_values(m, s, FaceMoments{RowMatrixXd::Zero(3 * Eigen::Index(m.num_faces()), 48), {}},
+                                            t_u.replicate(1, 3), o);
+  EXPECT_LT((rgb - projected.replicate(1, 3)).cwiseAbs().maxCoeff(), 1e-12 * projected.cwiseAbs().maxCoeff());
+  // Not transfer of that order: refused, naming what is wrong.
+  EXPECT_THROW(fit_vertex_values(m, s, FaceMoments{RowMatrixXd::Zero(3 * Eigen::Index(m.num_faces()), 9), {}}, t_u.leftCols(9), o),
+               InputError);
 }
 
 }  // namespace

@@ -50,6 +50,27 @@ TEST(SamplePlan, AnOpenPlaneNeedsNoSamples) {
   EXPECT_EQ(p.rays, uint64_t(PilotOptions{}.rays) * p.pilot_samples);
 }
 
+TEST(SamplePlan, WhereOnlyTheUnshadowedCurvatureDiffersNoFaceNeedsSamples) {
+  // A coarse sphere traced in a scene without it (nothing to hit, not even its own facets, which
+  // would shade a point whose interpolated normal tilts from its face's): every value is exactly
+  // t_u(n), yet t_u curves across each face, which the plain test calls interpolation error. With
+  // the fit projecting t_u exactly, the pilot tests what is left after it: nothing here.
+  const Mesh m = test::build(test::icosphere(1));
+  const Mesh far = test::build(test::transformed(test::cube(), 0.01, Eigen::Vector3d(100, 100, 100)));
+  const RayScene scene(far.positions, position_triangles(far));
+  TransferOptions o;
+  o.rays = 64;
+  std::vector<double> variance;
+  const RowMatrixX3d offsets = vertex_offset_directions(m);
+  const RowMatrixXd prior = shadowed_transfer(scene, vertex_positions(m), m.normals, o, nullptr, {}, &offsets, &variance);
+  PilotOptions plain, exact;
+  exact.exact_unshadowed = true;
+  const SamplePlan a = plan_samples(m, scene, make_pilot_samples(m, plain, 5), prior, variance, pilot_rays(), plain);
+  const SamplePlan b = plan_samples(m, scene, make_pilot_samples(m, exact, 5), prior, variance, pilot_rays(), exact);
+  EXPECT_GT(a.sampled_faces, m.num_faces() / 2);
+  EXPECT_EQ(b.sampled_faces, 0u);
+}
+
 TEST(SamplePlan, FacesWhereInterpolationFailsAreSampledTheOthersNot) {
   const Ground g(true);
   const SamplePlan p = plan(g);
