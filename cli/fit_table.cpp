@@ -99,7 +99,18 @@ int cmd_eval_fits(int argc, char** argv) {
   std::vector<Column> columns = fit_columns(b.fit);
   size_t clamped = 0;
   for (Column& c : columns) {
-    c.values = fit_vertex_values(mesh, data.samples, data.moments, base.transfer, c.options, &c.stats, &base.point_variance);
+    if (&c == &columns.back()) {  // the default: as the bake fits, α chosen on the hold-out when auto
+      double alpha = 0;
+      std::vector<std::pair<double, double>> trials;
+      c.values = fit_bake_values(mesh, data, base.transfer, base.point_variance, b, &c.stats, &alpha, &trials);
+      if (!trials.empty()) {
+        char label[64];
+        std::snprintf(label, sizeof label, "E_default (alpha auto: %g)", alpha);
+        c.label = label;
+      }
+    } else {
+      c.values = fit_vertex_values(mesh, data.samples, data.moments, base.transfer, c.options, &c.stats, &base.point_variance);
+    }
     if (ao) {
       const size_t n = clamp_ao(c.values);
       if (&c == &columns.back()) clamped = n;

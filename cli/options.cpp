@@ -1,5 +1,8 @@
 #include "cli/options.h"
 
+#include <cmath>
+#include <cstdlib>
+
 #include "cli/specs.h"
 #include "cli/images.h"
 #include "prtsub/prt/sh.h"
@@ -70,7 +73,9 @@ void BakeCli::add_fit(ArgParser& args) {
               {BounceCache::Auto, BounceCache::On, BounceCache::Off}, bounce_cache_name);
   args.choice("--fit", "vertex values: traced at the vertex, averaged from surface samples, or the least-squares fit\n"
               "to them (Kavan et al. 2011)", &f.method, {FitMethod::Point, FitMethod::Average, FitMethod::LeastSquares}, fit_method_name);
-  args.option("--alpha", "A", "lsq: regulariser weight; 0 is the plain least-squares optimum", &f.alpha, 0.0, 1e12);
+  args.option("--alpha", "A|auto", "lsq: regulariser weight (0: the plain least-squares optimum), or auto: of 0, 0.01 and\n"
+              "0.04 the one whose fit has the lowest error on the pilot's held-out samples (without a\n"
+              "pilot, 0.04) [default auto]", &alpha_);
   args.choice("--regularizer", "lsq: penalise gradient jumps across edges, or gradients", &f.regularizer,
               {Regularizer::Edge, Regularizer::Gradient}, regularizer_name);
   args.choice("--mass", "lsq: exact mass matrix, or the samples' own", &f.mass, {MassMatrix::Analytic, MassMatrix::Sampled},
@@ -165,6 +170,13 @@ BakeOptions BakeCli::options() const {
   if (!albedo_map_.empty()) {
     o.albedo_colour.source = AlbedoSource::Map, o.albedo_colour.map = albedo_map_;
     o.albedo_colour.image = std::make_shared<const Image>(cli_read_image(albedo_map_));
+  }
+  if (alpha_ != "auto") {
+    char* end = nullptr;
+    const double a = std::strtod(alpha_.c_str(), &end);
+    if (alpha_.empty() || end != alpha_.c_str() + alpha_.size() || !(a >= 0) || !std::isfinite(a))
+      throw UsageError("--alpha: expected a non-negative number or auto, got '" + alpha_ + "'");
+    o.fit.alpha = a, o.alpha_auto = false;
   }
   if (order_ == "auto") {
     o.order_auto = true;

@@ -46,6 +46,7 @@ struct BakeCli {
   int rays_fixed_ = 0;  // --rays-fixed R: no early stop
   std::string bounces_;  // --bounces N|auto
   std::string albedo_, albedo_map_;  // --albedo A|R,G,B|vertex, --albedo-map PATH
+  std::string alpha_ = "auto";       // --alpha A|auto
   std::string order_;    // --order N|auto
   std::vector<std::string> order_lights_;  // --order-light SPEC
 };

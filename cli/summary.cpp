@@ -124,7 +124,6 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("seconds_fit_solve", f.seconds_solve);
   r.set("noise_weighting", o.weigh_by_noise);
   r.set("kept_correction", f.kept_correction);
-  r.set("fit_unshadowed_projection", o.unshadowed_order > 0);
   r.set("fit_unshadowed_iterations", f.unshadowed_iterations);
   r.set("seconds_fit_unshadowed", f.seconds_unshadowed);
   r.set("non_negative", non_negative_name(o.non_negative));
@@ -217,6 +216,15 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("seconds_bounce", res.seconds_bounce);
   }
   record(r, res.fit, o.fit, res.fit_data, o.sample_rays);
+  if (o.fit.method == FitMethod::LeastSquares) {
+    r.set("alpha", res.alpha);
+    r.set("alpha_auto", !res.alpha_trials.empty());
+    std::string trials;
+    char buf[64];
+    for (const auto& [a, e] : res.alpha_trials) std::snprintf(buf, sizeof buf, "%s%g: %.3f%%", trials.empty() ? "" : ", ", a, e), trials += buf;
+    if (!trials.empty()) r.set("alpha_trials", trials);
+    r.set("fit_unshadowed_projection", resolve_bake_options(o).fit.unshadowed_order > 0 && !(res.simplified && res.simplify.collapses > 0));
+  }
   if (res.simplified && res.simplify.collapses > 0 && (o.refine != Refinement::Auto || res.refine.splits == 0)) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
   const bool early = early_stop_on(o);
@@ -316,6 +324,7 @@ void print_bake_summary(const Report& r) {
   if (fit == "lsq") {
     r.print(stdout, {"  fit:        least squares, {regularizer} regulariser, alpha {alpha}, {mass} mass; {samples} surface "
                      "samples ({sample_rays} rays each, {seconds_samples:3} s)"});
+    r.print(stdout, {"              alpha auto: the lowest held-out error of {alpha_trials}"});
     if (r.has("pilot_samples"))
       r.print(stdout, {"              pilot: {pilot_samples} of {pilot_samples_drawn} samples traced ({pilot_rays} rays, {seconds_pilot:3} s) found {sampled_faces} "
                        "faces where interpolation fails; {interpolated_faces} left to it",

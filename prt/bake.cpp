@@ -227,8 +227,15 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
     m.push_back({"sample_rays", std::to_string(o.sample_rays)});
   }
   if (o.fit.method == FitMethod::LeastSquares && !o.refine_only) {
-    m.push_back({"alpha", std::to_string(r.simplified && r.simplify.collapses > 0 && (o.refine != Refinement::Auto || r.refine.splits == 0)
-                                             ? o.simplified_alpha : o.fit.alpha)});
+    std::string alpha = std::to_string(r.simplified && r.simplify.collapses > 0 && (o.refine != Refinement::Auto || r.refine.splits == 0)
+                                           ? o.simplified_alpha : o.fit.alpha);
+    if (!r.alpha_trials.empty()) {
+      alpha += " (auto: the lowest held-out error of";
+      char buf[64];
+      for (const auto& [a, e] : r.alpha_trials) std::snprintf(buf, sizeof buf, " %g: %.3f%%", a, e), alpha += buf;
+      alpha += ")";
+    }
+    m.push_back({"alpha", alpha});
     m.push_back({"regularizer", regularizer_name(o.fit.regularizer)});
     m.push_back({"mass", mass_matrix_name(o.fit.mass)});
     m.push_back({"noise_weighting", o.fit.weigh_by_noise ? "on" : "off"});
@@ -452,6 +459,7 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   // The samples lie on the input, whose normals are not the asset's: t_u is not known there.
   fo.unshadowed_order = 0;
   r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, fo, &r.fit, both_ways ? &r.point_variance : nullptr);
+  r.alpha = fo.alpha;
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
@@ -484,7 +492,7 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
   }
   if (o.transfer.log) o.transfer.log->barrier(true);  // a sharded bake: the rest is the merge's
   r.point = r.transfer;
-  r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
+  r.transfer = fit_bake_values(r.mesh, r.fit_data, r.point, r.point_variance, o, &r.fit, &r.alpha, &r.alpha_trials);
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
@@ -618,6 +626,37 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
 
 }  // namespace
 
+RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatrixXd& prior, const std::vector<double>& prior_variance,
+                            const BakeOptions& o, FitStats* stats, double* alpha, std::vector<std::pair<double, double>>* trials) {
+  const std::vector<double>* variance = prior_variance.size() == mesh.num_vertices() ? &prior_variance : nullptr;
+  const bool choose = o.alpha_auto && o.fit.method == FitMethod::LeastSquares && data.allocation == SampleAllocation::Pilot &&
+                      data.plan.holdout.size() > 0 && !o.alpha_choices.empty();
+  if (alpha) *alpha = o.fit.alpha;
+  if (trials) trials->clear();
+  if (!choose) return fit_vertex_values(mesh, data.samples, data.moments, prior, o.fit, stats, variance);
+  // One corrected prior for every candidate: the projection does not depend on α.
+  FitStats known;
+  const RowMatrixXd base = fit_prior(mesh, prior, o.fit, &known);
+  FitOptions f = o.fit;
+  f.unshadowed_order = 0;
+  RowMatrixXd best;
+  double best_error = INFINITY;
+  for (double a : o.alpha_choices) {
+    f.alpha = a;
+    FitStats st;
+    RowMatrixXd x = fit_vertex_values(mesh, data.samples, data.moments, base, f, &st, variance);
+    const double e = holdout_error(mesh, data.plan.holdout, asset_values(o, x)).percent;
+    if (trials) trials->emplace_back(a, e);
+    if (e < best_error) {
+      best_error = e, best = std::move(x);
+      if (alpha) *alpha = a;
+      if (stats) *stats = st;
+    }
+  }
+  if (stats) stats->unshadowed_iterations = known.unshadowed_iterations, stats->seconds_unshadowed = known.seconds_unshadowed;
+  return best;
+}
+
 FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions& in, const RowMatrixXd* prior,
                       const std::vector<double>* prior_variance, const BakeProgress& progress) {
   const BakeOptions o = resolve_bake_options(in);
@@ -724,7 +763,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   }
   if (o.fit.method != FitMethod::Point) {
     if (r.simplified && r.simplify.collapses > 0) fit_to_source(mesh, scene, o, progress, clock, r);
-    else fit(scene, o, progress, clock, r);
+    else fit(scene, o, progress, clock, r), o.fit.alpha = r.alpha;  // the --error rounds and the bounced fit keep it
   }
   if (r.point.size() == 0) r.point = r.transfer;
   if (r.fit_data.allocation == SampleAllocation::Pilot) r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));

@@ -11,6 +11,7 @@
 // The library prints nothing: progress arrives through BakeProgress, warnings in the result.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -76,6 +77,12 @@ struct BakeOptions {
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples
+  //! LeastSquares with the pilot: fit.alpha is chosen among alpha_choices as the one whose fit
+  //! has the lowest error on the pilot's held-out samples (the regulariser's right strength
+  //! depends on how noisy the samples are against what they correct: none on most shared scenes,
+  //! 0.01 on conference; BENCHMARKS.md). Off, or without a hold-out: fit.alpha as given.
+  bool alpha_auto = true;
+  std::array<double, 3> alpha_choices = {0, 0.01, 0.04};
   SampleOptions samples;                       //!< how many samples the fit gets (its seed derives from transfer.seed)
   //! which faces get them: Pilot spends them only where interpolation fails (needs sample_rays ≥ 2)
   SampleAllocation allocation = SampleAllocation::Pilot;
@@ -156,6 +163,9 @@ struct BakeResult {
   size_t target_samples = 0;        //!< --error: the samples they added ...
   uint64_t target_sample_rays = 0;  //!< ... and their rays
   FitStats fit;
+  double alpha = 0;  //!< the fit's regulariser weight as used (chosen, with alpha_auto)
+  //! alpha_auto: each candidate α and the held-out error of its fit, in percent (empty otherwise)
+  std::vector<std::pair<double, double>> alpha_trials;
   BounceStats bounce;    //!< interreflection's passes (none when bounce.bounces is 0)
   OrderChoice order;     //!< --order auto: the order chosen and why (order 0 otherwise)
   size_t clamped = 0;    //!< AO: values clamped into [0, 1] after the fit
@@ -165,6 +175,16 @@ struct BakeResult {
   std::vector<std::string> warnings;
   Metadata metadata;     //!< what the asset records
 };
+
+//! The least-squares fit as the bake runs it (options.fit, with fit_prior's correction), and with
+//! options.alpha_auto and a pilot's hold-out in `data`, at the α of alpha_choices whose fit has
+//! the lowest held-out error (ties: the first). For fit methods other than LeastSquares, the
+//! plain fit_vertex_values.
+//! \param prior #V by K, the point values; prior_variance #V (or empty: no noise weighting)
+//! \param alpha receives the α used; trials each candidate's held-out error (percent), if asked
+RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatrixXd& prior, const std::vector<double>& prior_variance,
+                            const BakeOptions& options, FitStats* stats = nullptr, double* alpha = nullptr,
+                            std::vector<std::pair<double, double>>* trials = nullptr);
 
 //! Runs the pipeline on `mesh` (which it copies; refinement changes the copy).
 //! \throw InputError for bad options or a mesh refinement cannot take, EmbreeError, SolverError

@@ -1002,6 +1002,13 @@ RowMatrixXd corrected_prior(const Mesh& mesh, const RowMatrixXd& prior, const Fi
 
 }  // namespace
 
+RowMatrixXd fit_prior(const Mesh& mesh, const RowMatrixXd& prior, const FitOptions& o, FitStats* stats) {
+  FitStats st;
+  RowMatrixXd p = o.method == FitMethod::LeastSquares && o.unshadowed_order > 0 ? corrected_prior(mesh, prior, o, st) : prior;
+  if (stats) stats->unshadowed_iterations = st.unshadowed_iterations, stats->seconds_unshadowed = st.seconds_unshadowed;
+  return p;
+}
+
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments,
                               const RowMatrixXd& given_prior, const FitOptions& o, FitStats* stats_out,
                               const std::vector<double>* prior_variance) {

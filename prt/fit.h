@@ -193,6 +193,13 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, c
                               const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr,
                               const std::vector<double>* prior_variance = nullptr);
 
+//! The prior as the least-squares path fits around it: with options.unshadowed_order, corrected by
+//! the known part's exact projection, P(w·t_u) − w·t_u(n_i) (w each vertex's open share); the prior
+//! itself otherwise. Several fits of one prior (other α, say) share it: fit them with
+//! unshadowed_order 0. `stats` gets unshadowed_iterations and seconds_unshadowed.
+//! \throw InputError when the prior is not transfer of that order (channels × order² columns)
+RowMatrixXd fit_prior(const Mesh& mesh, const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
+
 //! The same from stored sample values (#S by K).
 RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& samples, const RowMatrixXd& values,
                               const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);

@@ -117,7 +117,10 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "threads") o.transfer.threads = value.cast<int>();
     else if (key == "signal") o.signal = parse_asset_signal(value.cast<std::string>());
     else if (key == "fit") o.fit.method = parse_fit_method(value.cast<std::string>());
-    else if (key == "alpha") o.fit.alpha = value.cast<double>();
+    else if (key == "alpha") {
+      if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.alpha_auto = true;
+      else o.fit.alpha = value.cast<double>(), o.alpha_auto = false;
+    }
     else if (key == "refine") o.refine = parse_refinement(value.cast<std::string>());
     else if (key == "budget") o.adaptive.budget = value.cast<size_t>();
     else if (key == "levels") o.uniform.levels = value.cast<int>();

@@ -57,6 +57,28 @@ TEST(Bake, ProjectingTheUnshadowedPartLowersTheErrorOfASmoothSurface) {
   EXPECT_LT(projected.fit_data.plan.sampled_faces, before.fit_data.plan.sampled_faces);
 }
 
+TEST(Bake, AlphaAutoKeepsTheCandidateWhoseFitHasTheLowestHeldOutError) {
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.transfer.rays = 64, o.transfer.threads = 1;
+  const BakeResult a = bake(mesh, o);
+  ASSERT_EQ(a.alpha_trials.size(), 3u);
+  ASSERT_GT(a.fit_data.plan.sampled_faces, 0u);
+  const auto best = std::min_element(a.alpha_trials.begin(), a.alpha_trials.end(),
+                                     [](const auto& x, const auto& y) { return x.second < y.second; });
+  EXPECT_EQ(a.alpha, best->first);
+  EXPECT_EQ(a.predicted.percent, best->second);  // the asset is that candidate's fit
+  // The candidates differ: the choice is not idle.
+  EXPECT_GT(std::max_element(a.alpha_trials.begin(), a.alpha_trials.end(),
+                             [](const auto& x, const auto& y) { return x.second < y.second; })->second,
+            1.001 * best->second);
+  // Given that α outright, the bake is the same asset bit for bit.
+  o.alpha_auto = false, o.fit.alpha = a.alpha;
+  const BakeResult b = bake(mesh, o);
+  EXPECT_TRUE(b.alpha_trials.empty());
+  EXPECT_EQ((a.transfer - b.transfer).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
   const Mesh mesh = sphere_on_plane();
   BakeOptions o;

@@ -55,6 +55,8 @@ TEST(Batch, TheKeyChangesWithEveryOptionThatChangesTheAssetAndNotWithThreads) {
       {"cg_max_iterations", [](BatchOptions& o) { o.bake.fit.cg_max_iterations = 50; }},
       {"weigh_by_noise", [](BatchOptions& o) { o.bake.fit.weigh_by_noise = false; }},
       {"unshadowed_projection", [](BatchOptions& o) { o.bake.unshadowed_projection = false; }},
+      {"alpha_auto", [](BatchOptions& o) { o.bake.alpha_auto = false; }},
+      {"alpha_choices", [](BatchOptions& o) { o.bake.alpha_choices = {0, 0.1, 1}; }},
       {"non_negative", [](BatchOptions& o) { o.bake.fit.non_negative = NonNegative::Off; }},
       {"per_triangle", [](BatchOptions& o) { o.bake.samples.per_triangle = 8; }},
       {"density", [](BatchOptions& o) { o.bake.samples.density = 3; }},

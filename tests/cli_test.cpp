@@ -115,6 +115,16 @@ TEST_F(Cli, AmbientOcclusionAssetsHoldOneClampedValuePerVertex) {
   EXPECT_EQ(read_file_bytes(out).find("property float t0"), std::string::npos);
   EXPECT_EQ(run({"bake", in, "-o", out, "--signal", "light"}), 2);
   EXPECT_EQ(run({"bake", in, "-o", out, "--fit", "spline"}), 2);
+  // --alpha takes a number or auto; anything else names the option and the value.
+  EXPECT_EQ(run({"bake", in, "-o", out, "--alpha", "0.02"}), 0);
+  EXPECT_EQ(run({"bake", in, "-o", out, "--alpha", "auto", "--report", dir.path("alpha.json")}), 0);
+  EXPECT_NE(read_file_bytes(dir.path("alpha.json")).find("\"alpha_auto\": true"), std::string::npos);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"bake", in, "-o", out, "--alpha", "-1"}), 2);
+  EXPECT_EQ(run({"bake", in, "-o", out, "--alpha", "some"}), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("--alpha: expected a non-negative number or auto, got '-1'"), std::string::npos) << err;
+  EXPECT_NE(err.find("got 'some'"), std::string::npos) << err;
 }
 
 TEST_F(Cli, EvalFitsReportsThePapersFourErrorsAndBenchTimesTheFit) {
