@@ -88,7 +88,8 @@ struct BakeOptions {
   SampleAllocation allocation = SampleAllocation::Pilot;
   PilotOptions pilot;
   //! Pilot: the share of the sample rays the pilot saved (against sampling every face) that goes
-  //! to more rays at the noisiest vertices instead (top_up_vertices); 0 keeps them unspent
+  //! to more rays at the noisiest vertices instead (top_up_vertices), at most as many as the vertices
+  //! traced before it (so --rays sets the cost); 0 keeps them unspent
   double vertex_share = 0.5;
   //! --error: when > 0 (percent, eval's unit), trace more vertex rays, or give the fit more samples
   //! where interpolation is what is left, until the error measured on the pilot's held-out
