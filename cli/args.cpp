@@ -134,6 +134,8 @@ bool ArgParser::parse(int argc, char** argv, int first) {
         value = argv[++i];
       }
       spec->set(value);
+      for (const auto& [name, hook] : hooks_)
+        if (name == spec->name) hook();
     } else {
       if (next_positional >= positionals_.size()) {
         if (!rest_) throw UsageError(command_ + ": unexpected argument '" + arg + "'");

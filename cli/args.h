@@ -53,6 +53,9 @@ class ArgParser {
   void flag(const std::string& name, const std::string& help, bool* out);
   //! A short alias such as -o for an option already declared.
   void alias(const std::string& short_name, const std::string& long_name);
+  //! Calls `f` whenever the option is given (after its value is set): for a default that depends
+  //! on whether the user chose a value at all.
+  void when_given(const std::string& name, std::function<void()> f) { hooks_.emplace_back(name, std::move(f)); }
 
   //! Parses argv[first..argc). Returns false when --help was asked for (and printed).
   //! \throw UsageError naming the option for unknown options, missing or bad values
@@ -73,6 +76,7 @@ class ArgParser {
   std::string rest_name_;
   std::vector<std::string>* rest_ = nullptr;
   std::vector<std::string> positional_help_;
+  std::vector<std::pair<std::string, std::function<void()>>> hooks_;
 };
 
 }  // namespace prtsub

@@ -40,6 +40,7 @@ void BakeCli::add_common(ArgParser& args) {
   args.option("--order-light", "SPEC", "--order auto: errors under this light turned any way (the --light syntax of render;\n"
               "lights add up) instead of the worst light, eval's metric", &order_lights_);
   add_transfer_options(args, bake.transfer, false);
+  args.when_given("--rays", [this] { rays_given_ = true; });
   args.option("--first-rays", "R", "per-vertex early stop: each vertex traces R rays (even), then doubles them while a\n"
               "doubling is worth its rays, up to --rays", &bake.round_rays, 2, 1 << 20);
   args.option("--ray-noise", "P", "early stop: the price of a doubling, as the noise (percent of ||t_unshadowed||) at which\n"
@@ -102,7 +103,8 @@ void BakeCli::add_fit(ArgParser& args) {
               {SampleAllocation::Pilot, SampleAllocation::Area}, sample_allocation_name);
   args.option("--pilot-samples", "N", "fit, pilot: pilot samples per triangle", &bake.pilot.per_triangle, 0.01, 1e3);
   args.option("--error", "E", "fit, pilot: trace more vertex rays until the error measured on the pilot's held-out samples\n"
-              "(eval's percent) is at most E; 0: off", &bake.target_error, 0.0, 1e6);
+              "(eval's percent) is at most E (without --rays, the first round's rays are chosen for E: 32\n"
+              "to 256, from a pilot of the vertices); 0: off", &bake.target_error, 0.0, 1e6);
   args.option("--pilot-vertex-share", "S", "fit, pilot: share of the sample rays the pilot saved that go to the noisiest\n"
               "vertices instead", &bake.vertex_share, 0.0, 1e3);
   args.option("--pilot-rays", "R", "fit, pilot: rays per pilot sample", &bake.pilot.rays, 2, 1 << 20);
@@ -196,6 +198,7 @@ BakeOptions BakeCli::options() const {
         o.order_choice.band_power[static_cast<size_t>(l)] += light.coeffs.row(k).squaredNorm() / 3;  // the channels' mean
   }
   if (rays_fixed_ > 0) o.transfer.rays = rays_fixed_, o.round_rays = 0;
+  o.rays_auto = o.target_error > 0 && !rays_given_ && rays_fixed_ == 0 && o.round_rays == 0;
   if (o.round_rays % 2 != 0) throw UsageError("--first-rays: expected an even count, got " + std::to_string(o.round_rays));
   o.bounce.fit_samples = !bounce_vertices_only_;
   o.fit.control_variate = !no_control_variate_;

@@ -247,6 +247,18 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("target_sample_rays", res.target_sample_rays);
     r.set("target_sample_rounds", res.target_sample_rounds);
     r.set("seconds_target", res.seconds_target);
+    if (res.first_round.rays > 0) {
+      r.set("target_first_round_rays", res.first_round.rays);
+      r.set("target_first_round_points", static_cast<uint64_t>(res.first_round.points));
+      r.set("target_first_round_pilot_rays", res.first_round.pilot_rays);
+      const int counts[] = {32, 64, 128, 256};
+      std::string noise;
+      char buf[48];
+      for (size_t k = 0; k < res.first_round.noise_percent.size() && k < 4; ++k)
+        std::snprintf(buf, sizeof buf, "%s%d: %.3f%%", noise.empty() ? "" : ", ", counts[k], res.first_round.noise_percent[k]), noise += buf;
+      r.set("target_first_round_noise", noise);
+      r.set("target_first_round_decay", res.first_round.decay);
+    }
   }
   if (o.signal == AssetSignal::Ao) r.set("clamped_values", res.clamped);
   const double trace_seconds = res.seconds_transfer + res.refine.seconds_signal + res.seconds_samples + res.seconds_top_up;
@@ -350,7 +362,9 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
                      "on {predicted_error_samples} held-out pilot samples: what prtsub eval should find"});
   if (r.has("target_error_percent"))
-    r.print(stdout, {"              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds, "
+    r.print(stdout, {"              target {target_error_percent}%: first round {target_first_round_rays} rays per vertex (a pilot of "
+                     "{target_first_round_points} vertices predicts noise R^-{target_first_round_decay:2}, at 32-256: {target_first_round_noise})",
+                     "              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds, "
                      "{target_samples} more samples in {target_sample_rounds} ({seconds_target:3} s)"});
   if (r.has("merged_parts"))
     r.print(stdout, {"  rays:       {rays}, traced by {merged_shards} shards in {merged_phases} phases ({merged_parts}) and replayed here"});

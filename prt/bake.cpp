@@ -729,6 +729,17 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     r.rays += r.order.rays;
     clock.lap();
   }
+  if (o.target_error > 0 && o.rays_auto && !o.transfer.log) {
+    // A loose target needs few rays: the first round takes what a pilot of vertices predicts.
+    if (progress.stage) progress.stage("first round", 0);
+    // The pilot's second round of vertex rays spends up to as many again: judged at twice the rays.
+    const bool second = o.fit.method != FitMethod::Point && o.allocation == SampleAllocation::Pilot && o.vertex_share > 0;
+    r.first_round = choose_first_rays(r.mesh, scene, o.transfer, o.target_error / std::sqrt(2.0), unshadowed_norm(o.transfer.order) / 100,
+                                      {32, 64, 128, 256}, second ? 2.0 : 1.0);
+    o.transfer.rays = r.first_round.rays;
+    r.rays += r.first_round.pilot_rays;
+    o = resolve_bake_options(o);
+  }
   if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
   const TransferOptions first = first_round(o);
   r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, first, &stats, progress.add, &offsets, &r.point_variance);

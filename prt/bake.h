@@ -95,6 +95,11 @@ struct BakeOptions {
   //! where interpolation is what is left, until the error measured on the pilot's held-out
   //! samples is at most this (needs Pilot allocation)
   double target_error = 0;
+  //! With target_error: the first round's rays are chosen instead of transfer.rays, the least of
+  //! 32, 64, 128 and 256 whose noise a pilot of vertices predicts within target_error/√2
+  //! (choose_first_rays), so that a loose target costs a cheap bake (later rounds add what the
+  //! hold-out finds missing). The CLI sets it when --error is given without --rays.
+  bool rays_auto = false;
   //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
   int sample_rays = 16;
   //! Transfer with the least-squares fit: the curvature of the unshadowed part t_u(n) inside the
@@ -163,6 +168,7 @@ struct BakeResult {
   int target_sample_rounds = 0;     //!< --error: rounds of more samples
   size_t target_samples = 0;        //!< --error: the samples they added ...
   uint64_t target_sample_rays = 0;  //!< ... and their rays
+  FirstRoundChoice first_round;     //!< rays_auto: the first round's rays and why (rays 0 otherwise)
   FitStats fit;
   double alpha = 0;  //!< the fit's regulariser weight as used (chosen, with alpha_auto)
   //! alpha_auto: each candidate α and the held-out error of its fit, in percent (empty otherwise)

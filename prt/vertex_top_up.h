@@ -52,6 +52,27 @@ std::vector<double> smoothed_variance(const Mesh& mesh, const std::vector<double
 //! A third of the area of the faces around each vertex: the weights for a surface error.
 std::vector<double> vertex_areas(const Mesh& mesh);
 
+//! The first round's rays an error target asks for (--error without --rays).
+struct FirstRoundChoice {
+  int rays = 0;                      //!< chosen: the least of the choices whose noise is within the target
+  size_t points = 0;                 //!< pilot vertices traced
+  uint64_t pilot_rays = 0;           //!< their rays (spent on the estimate alone)
+  std::vector<double> noise_percent;  //!< per choice: the noise it would leave, in the target's unit
+  double decay = 0;                  //!< the noise's measured exponent, R^-decay (0.5 for independent rays)
+};
+
+//! Traces a systematic pilot of at most `points` vertices (every ⌈V/points⌉-th) at pilot_rays/2
+//! and at pilot_rays (seed mixed from options.seed: independent of every later ray); from their
+//! variances (the estimator's two halves) estimates the surface noise Σ w_i σ_i²/2A at both counts
+//! (w_i a third of the area around vertex i), hence its decay exponent (the lattice's error falls
+//! faster than 1/√R), and picks the least of `choices` (ascending) whose noise at after·R rays is
+//! at most `target_noise` (in the unit `unit` of values: ‖t_unshadowed‖/100 for percent), or the
+//! largest. `after`: how many times the first round's rays the vertices will have traced when the
+//! error is measured (2 with the pilot's second round of vertex rays).
+FirstRoundChoice choose_first_rays(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, double target_noise,
+                                   double unit, const std::vector<int>& choices, double after = 1, size_t points = 2000,
+                                   int pilot_rays = 128);
+
 //! Traces a plan's rays and merges them into `values`, `variance` and `rays` (each vertex's ray
 //! count so far, the weight of what it had). `options` are the first round's (seed, stream
 //! offset, and rays = its count): each vertex's lattice is continued from where it stopped. An

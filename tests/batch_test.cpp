@@ -56,6 +56,7 @@ TEST(Batch, TheKeyChangesWithEveryOptionThatChangesTheAssetAndNotWithThreads) {
       {"weigh_by_noise", [](BatchOptions& o) { o.bake.fit.weigh_by_noise = false; }},
       {"unshadowed_projection", [](BatchOptions& o) { o.bake.unshadowed_projection = false; }},
       {"alpha_auto", [](BatchOptions& o) { o.bake.alpha_auto = false; }},
+      {"rays_auto", [](BatchOptions& o) { o.bake.rays_auto = true; }},
       {"alpha_choices", [](BatchOptions& o) { o.bake.alpha_choices = {0, 0.1, 1}; }},
       {"non_negative", [](BatchOptions& o) { o.bake.fit.non_negative = NonNegative::Off; }},
       {"per_triangle", [](BatchOptions& o) { o.bake.samples.per_triangle = 8; }},
