@@ -652,11 +652,10 @@ RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatr
     RowMatrixXd x = fit_vertex_values(mesh, data.samples, data.moments, base, f, &st, variance);
     const double e = holdout_error(mesh, data.plan.holdout, asset_values(o, x)).percent;
     if (trials) trials->emplace_back(a, e);
-    if (e < best_error) {
-      best_error = e, best = std::move(x);
-      if (alpha) *alpha = a;
-      if (stats) *stats = st;
-    }
+    if (!(e < best_error)) break;  // ascending choices: past the best, more smoothing only adds bias
+    best_error = e, best = std::move(x);
+    if (alpha) *alpha = a;
+    if (stats) *stats = st;
   }
   if (stats) stats->unshadowed_iterations = known.unshadowed_iterations, stats->seconds_unshadowed = known.seconds_unshadowed;
   return best;

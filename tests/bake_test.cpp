@@ -62,12 +62,14 @@ TEST(Bake, AlphaAutoKeepsTheCandidateWhoseFitHasTheLowestHeldOutError) {
   BakeOptions o;
   o.transfer.rays = 64, o.transfer.threads = 1;
   const BakeResult a = bake(mesh, o);
-  ASSERT_EQ(a.alpha_trials.size(), 3u);
+  ASSERT_GE(a.alpha_trials.size(), 2u);
   ASSERT_GT(a.fit_data.plan.sampled_faces, 0u);
   const auto best = std::min_element(a.alpha_trials.begin(), a.alpha_trials.end(),
                                      [](const auto& x, const auto& y) { return x.second < y.second; });
   EXPECT_EQ(a.alpha, best->first);
   EXPECT_EQ(a.predicted.percent, best->second);  // the asset is that candidate's fit
+  // The search stops at the first candidate past the best: the last tried did no better.
+  EXPECT_TRUE(a.alpha_trials.size() == 3 || !(a.alpha_trials.back().second < a.alpha_trials[a.alpha_trials.size() - 2].second));
   // The candidates differ: the choice is not idle.
   EXPECT_GT(std::max_element(a.alpha_trials.begin(), a.alpha_trials.end(),
                              [](const auto& x, const auto& y) { return x.second < y.second; })->second,
