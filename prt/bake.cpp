@@ -653,9 +653,11 @@ RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatr
     const double e = holdout_error(mesh, data.plan.holdout, asset_values(o, x)).percent;
     if (trials) trials->emplace_back(a, e);
     if (!(e < best_error)) break;  // ascending choices: past the best, more smoothing only adds bias
+    const bool flat = std::isfinite(best_error) && e > (1 - 1e-3) * best_error;  // a gain within the hold-out's noise
     best_error = e, best = std::move(x);
     if (alpha) *alpha = a;
     if (stats) *stats = st;
+    if (flat) break;
   }
   if (stats) stats->unshadowed_iterations = known.unshadowed_iterations, stats->seconds_unshadowed = known.seconds_unshadowed;
   return best;

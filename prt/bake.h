@@ -187,7 +187,7 @@ struct BakeResult {
 //! The least-squares fit as the bake runs it (options.fit, with fit_prior's correction), and with
 //! options.alpha_auto and a pilot's hold-out in `data`, at the α of alpha_choices (ascending) whose
 //! fit has the lowest held-out error, stopping at the first that does no better than the one
-//! before it (ties: the smaller). For fit methods other than LeastSquares, the plain
+//! before it, or better by under 0.1% (ties: the smaller). For fit methods other than LeastSquares, the plain
 //! fit_vertex_values.
 //! \param prior #V by K, the point values; prior_variance #V (or empty: no noise weighting)
 //! \param alpha receives the α used; trials each candidate's held-out error (percent), if asked

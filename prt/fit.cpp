@@ -39,7 +39,12 @@
 // mass matrix, faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
 // λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed.
 //
-// After the solve, two steps that the paper does not have:
+// Before the solve, for shadowed transfer (FitOptions::unshadowed_order), a step the paper does
+// not have: the prior is corrected by the exact projection of the unshadowed transfer's curvature
+// in the interpolated normal, P(w·t_u) − w·t_u(n_i) (unshadowed_projection.cpp), which no vertex
+// values interpolate and samples see only through their noise.
+//
+// After the solve, two more such steps:
 //  - Weighing by noise. The point samples (the prior) and the fit are two estimates of each
 //    vertex's value: the prior is biased where a face hides what its corners miss, the fit is
 //    noisy where its samples carry few rays. Given the prior's variance (from the transfer
@@ -163,30 +168,11 @@ void by_vertex_range(size_t V, int threads, Body&& body) {
   });
 }
 
-// Every vertex in breadth-first order over the faces (each component from its lowest vertex).
-// A scanned mesh's vertex order can be far from its faces' (armadillo: consecutive faces' first
-// vertices lie a median 25,302 apart: bench/vertex_order.py); the fit works in this order instead, so that a vertex's
+// The fit works with every vertex in breadth-first order over the faces (breadth_first_order). A
+// scanned mesh's vertex order can be far from its faces' (armadillo: consecutive faces' first
+// vertices lie a median 25,302 apart: bench/vertex_order.py); in this order a vertex's
 // neighbours, and the faces around it, sit nearby in memory: in CG's passes over the rows and
-// in the assembly's walks over the faces.
-std::vector<uint32_t> breadth_first_order(const Mesh& mesh, const Buckets& corners) {
-  const size_t V = mesh.num_vertices();
-  std::vector<char> seen(V, 0);
-  std::vector<uint32_t> queue;
-  queue.reserve(V);
-  size_t head = 0;
-  for (uint32_t seed = 0; seed < V; ++seed) {
-    if (seen[seed]) continue;
-    seen[seed] = 1;
-    queue.push_back(seed);
-    for (; head < queue.size(); ++head)
-      for (uint32_t k = corners.begin[queue[head]]; k < corners.begin[queue[head] + 1]; ++k)
-        for (uint32_t u : mesh.triangles[corners.entry[k] / 3])
-          if (!seen[u]) seen[u] = 1, queue.push_back(u);
-  }
-  return queue;
-}
-
-// The faces by the least rank of their corners (ties keep face order).
+// in the assembly's walks over the faces. The faces, by their lowest-ranked corner:
 std::vector<uint32_t> faces_in_rank_order(const Mesh& mesh, const std::vector<uint32_t>& rank) {
   const std::vector<Triangle>& t = mesh.triangles;
   return bucket_sort(mesh.num_vertices(), t.size(), 1, [&](size_t f, uint32_t) {
@@ -612,7 +598,7 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const Eigen::Index K = moments.rows.cols();
   const std::vector<FaceGeometry> geom = all_face_geometry(mesh, o.threads);
   const Buckets corners = vertex_corners(mesh.triangles, mesh.num_vertices());
-  const std::vector<uint32_t> by_rank = breadth_first_order(mesh, corners);
+  const std::vector<uint32_t> by_rank = breadth_first_order(mesh.triangles, corners, mesh.num_vertices());
   std::vector<uint32_t> rank(static_cast<size_t>(V));
   for (uint32_t r = 0; r < by_rank.size(); ++r) rank[by_rank[r]] = r;
   RowMatrixXd prior_ranked(V, K);

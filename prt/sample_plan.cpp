@@ -26,6 +26,11 @@
 // their samples traced and face the full test. On a dense scan, where interpolation serves almost
 // every face, the pilot then costs little more than its first half.
 //
+// When the fit projects the unshadowed transfer's curvature exactly (exact_unshadowed), what is
+// compared is what is left after that known part, w(p)·t_u(n(p)) (w the vertices' open shares,
+// interpolated): r = f̂(p) − w(p)·t_u(n(p)) − Σ_c h_c(p)(x̂_c − w_c·t_u(n_c)). A face is then sampled
+// for a shadow inside it, not for curvature the projection handles with no rays.
+//
 // The pilot's own samples are not reused in the fit: its allocation would depend on their
 // values, and the fit's moments would no longer be unbiased.
 #include "prtsub/prt/sample_plan.h"

@@ -158,15 +158,17 @@ RowMatrixXd unshadowed_projection(const Mesh& mesh, int order, const UnshadowedP
     area[f] = std::isfinite(a) && a > 0 ? a : 0;
   }
   const Buckets corners = vertex_corners(mesh.triangles, V);
-  // The unknowns: vertices with a face of positive area. The rest keep t_u(n_i).
+  // The unknowns: vertices with a face of positive area (the rest keep w_i·t_u(n_i)), numbered
+  // breadth-first so that each row's neighbours, and the faces they share, are near in memory.
   std::vector<Eigen::Index> slot(V, -1);
-  Eigen::Index n = 0;
-  for (size_t i = 0; i < V; ++i) {
+  std::vector<uint32_t> vertex_of;  // by unknown
+  vertex_of.reserve(V);
+  for (uint32_t i : breadth_first_order(mesh.triangles, corners, V)) {
     bool any = false;
-    for (uint32_t e = corners.begin[i]; e < corners.begin[i + 1] && !any; ++e)
-      any = area[corners.entry[e] / 3] > 0;
-    if (any) slot[i] = n++;
+    for (uint32_t e = corners.begin[i]; e < corners.begin[i + 1] && !any; ++e) any = area[corners.entry[e] / 3] > 0;
+    if (any) slot[i] = static_cast<Eigen::Index>(vertex_of.size()), vertex_of.push_back(i);
   }
+  const auto n = static_cast<Eigen::Index>(vertex_of.size());
   UnshadowedProjectionStats st;
   st.fixed_vertices = V - static_cast<size_t>(n);
   if (n == 0 || K == 0) {
@@ -214,11 +216,10 @@ RowMatrixXd unshadowed_projection(const Mesh& mesh, int order, const UnshadowedP
   std::vector<Eigen::Index> row_size(static_cast<size_t>(n) + 1, 0);
   Eigen::VectorXd scale(n);
   RowMatrixXd rhs = RowMatrixXd::Zero(n, K);
-  parallel_range<size_t>(V, o.threads, 1024, [&](const tbb::blocked_range<size_t>& range) {
+  parallel_range<Eigen::Index>(n, o.threads, 1024, [&](const tbb::blocked_range<Eigen::Index>& range) {
     std::vector<std::pair<Eigen::Index, double>> buf;
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      if (slot[i] < 0) continue;
-      const Eigen::Index r = slot[i];
+    for (Eigen::Index r = range.begin(); r != range.end(); ++r) {
+      const uint32_t i = vertex_of[static_cast<size_t>(r)];
       gather_row(i, buf);
       row_size[static_cast<size_t>(r) + 1] = static_cast<Eigen::Index>(buf.size());
       for (const auto& [j, v] : buf)
@@ -240,11 +241,10 @@ RowMatrixXd unshadowed_projection(const Mesh& mesh, int order, const UnshadowedP
   for (Eigen::Index r = 0; r <= n; ++r)
     M.outerIndexPtr()[r] =
         static_cast<RowSparseMatrixd::StorageIndex>(row_size[static_cast<size_t>(r)]);
-  parallel_range<size_t>(V, o.threads, 1024, [&](const tbb::blocked_range<size_t>& range) {
+  parallel_range<Eigen::Index>(n, o.threads, 1024, [&](const tbb::blocked_range<Eigen::Index>& range) {
     std::vector<std::pair<Eigen::Index, double>> buf;
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      if (slot[i] < 0) continue;
-      const Eigen::Index r = slot[i];
+    for (Eigen::Index r = range.begin(); r != range.end(); ++r) {
+      const uint32_t i = vertex_of[static_cast<size_t>(r)];
       gather_row(i, buf);
       Eigen::Index at = row_size[static_cast<size_t>(r)];
       for (const auto& [j, v] : buf) {

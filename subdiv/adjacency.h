@@ -63,6 +63,27 @@ inline Buckets vertex_corners(const std::vector<Triangle>& triangles, size_t ver
   return bucket_sort(vertices, triangles.size(), 3, [&](size_t f, uint32_t c) { return triangles[f][c]; });
 }
 
+//! The vertices in breadth-first order over shared faces (each component from its lowest index):
+//! neighbours get nearby ranks whatever the input's vertex order, so that arrays walked in this
+//! order read their neighbours from cache (a scan's order, or a refined mesh's, can be far from
+//! its faces'). \param corners vertex_corners(triangles, vertices)
+inline std::vector<uint32_t> breadth_first_order(const std::vector<Triangle>& triangles, const Buckets& corners, size_t vertices) {
+  std::vector<char> seen(vertices, 0);
+  std::vector<uint32_t> queue;
+  queue.reserve(vertices);
+  size_t head = 0;
+  for (uint32_t seed = 0; seed < vertices; ++seed) {
+    if (seen[seed]) continue;
+    seen[seed] = 1;
+    queue.push_back(seed);
+    for (; head < queue.size(); ++head)
+      for (uint32_t k = corners.begin[queue[head]]; k < corners.begin[queue[head] + 1]; ++k)
+        for (uint32_t u : triangles[corners.entry[k] / 3])
+          if (!seen[u]) seen[u] = 1, queue.push_back(u);
+  }
+  return queue;
+}
+
 //! Vertex at the tail (corner k) and head (corner k+1) of half-edge h, through the map.
 inline uint32_t half_edge_tail(const std::vector<Triangle>& t, uint32_t h) { return t[h / 3][h % 3]; }
 inline uint32_t half_edge_head(const std::vector<Triangle>& t, uint32_t h) { return t[h / 3][(h % 3 + 1) % 3]; }
