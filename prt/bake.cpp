@@ -645,19 +645,21 @@ RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatr
   FitOptions f = o.fit;
   f.unshadowed_order = 0;
   RowMatrixXd best;
-  double best_error = INFINITY;
   for (double a : o.alpha_choices) {
     f.alpha = a;
     FitStats st;
-    RowMatrixXd x = fit_vertex_values(mesh, data.samples, data.moments, base, f, &st, variance);
-    const double e = holdout_error(mesh, data.plan.holdout, asset_values(o, x)).percent;
-    if (trials) trials->emplace_back(a, e);
-    if (!(e < best_error)) break;  // ascending choices: past the best, more smoothing only adds bias
-    const bool flat = std::isfinite(best_error) && e > (1 - 1e-3) * best_error;  // a gain within the hold-out's noise
-    best_error = e, best = std::move(x);
+    RowMatrixXd x = asset_values(o, fit_vertex_values(mesh, data.samples, data.moments, base, f, &st, variance));
+    if (trials) trials->emplace_back(a, holdout_error(mesh, data.plan.holdout, x).percent);
+    // Ascending choices: more smoothing only where the hold-out can tell it is better (its gain
+    // over the fit kept, paired on the same samples, above twice its standard error); past that
+    // it only adds bias, and a gain within the hold-out's noise is no reason to smooth.
+    if (best.size() > 0) {
+      const ErrorDifference gain = holdout_difference(mesh, data.plan.holdout, best, x);
+      if (!(gain.mean > 2 * gain.standard_error)) break;
+    }
+    best = std::move(x);
     if (alpha) *alpha = a;
     if (stats) *stats = st;
-    if (flat) break;
   }
   if (stats) stats->unshadowed_iterations = known.unshadowed_iterations, stats->seconds_unshadowed = known.seconds_unshadowed;
   return best;

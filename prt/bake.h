@@ -77,9 +77,9 @@ struct BakeOptions {
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples
-  //! LeastSquares with the pilot: fit.alpha is chosen among alpha_choices (ascending; the search
-  //! stops once one does no better than the one before) as the one whose fit has the lowest error
-  //! on the pilot's held-out samples (the regulariser's right strength
+  //! LeastSquares with the pilot: fit.alpha is chosen among alpha_choices (ascending), moving to
+  //! the next only while it lowers the error on the pilot's held-out samples by more than twice the
+  //! standard error of the paired difference (the regulariser's right strength
   //! depends on how noisy the samples are against what they correct: none on most shared scenes,
   //! 0.01 on conference; BENCHMARKS.md). Off, or without a hold-out: fit.alpha as given.
   bool alpha_auto = true;
@@ -185,9 +185,9 @@ struct BakeResult {
 };
 
 //! The least-squares fit as the bake runs it (options.fit, with fit_prior's correction), and with
-//! options.alpha_auto and a pilot's hold-out in `data`, at the α of alpha_choices (ascending) whose
-//! fit has the lowest held-out error, stopping at the first that does no better than the one
-//! before it, or better by under 0.1% (ties: the smaller). For fit methods other than LeastSquares, the plain
+//! options.alpha_auto and a pilot's hold-out in `data`, at the α of alpha_choices (ascending)
+//! reached by moving to the next only while its fit is better on the held-out samples by more than
+//! twice the standard error of the paired difference (holdout_difference). For fit methods other than LeastSquares, the plain
 //! fit_vertex_values.
 //! \param prior #V by K, the point values; prior_variance #V (or empty: no noise weighting)
 //! \param alpha receives the α used; trials each candidate's held-out error (percent), if asked

@@ -47,4 +47,27 @@ ErrorEstimate holdout_error(const Mesh& mesh, const Holdout& h, const RowMatrixX
   return e;
 }
 
+ErrorDifference holdout_difference(const Mesh& mesh, const Holdout& h, const RowMatrixXd& a, const RowMatrixXd& b) {
+  if (static_cast<size_t>(a.rows()) != mesh.num_vertices() || a.rows() != b.rows() || a.cols() != b.cols())
+    throw InputError("hold-out difference: two sets of values of one row per vertex expected");
+  ErrorDifference d;
+  const size_t n = h.size();
+  if (n == 0) return d;
+  if (h.values.cols() != a.cols()) throw InputError("hold-out difference: the values' order does not match the samples'");
+  double sw = 0, sum = 0, sum2 = 0, sw2 = 0;
+  for (size_t k = 0; k < n; ++k) {
+    if (h.face[k] >= mesh.num_faces() || !std::isfinite(h.variance[k])) continue;
+    const Triangle& t = mesh.triangles[h.face[k]];
+    const auto r = static_cast<Eigen::Index>(k);
+    Eigen::VectorXd da = h.values.row(r).cast<double>().transpose(), db = da;
+    for (int c = 0; c < 3; ++c) da -= h.barycentric(r, c) * a.row(t[c]).transpose(), db -= h.barycentric(r, c) * b.row(t[c]).transpose();
+    const double term = da.squaredNorm() - db.squaredNorm(), w = h.weight[k];
+    sw += w, sum += w * term, sum2 += w * term * term, sw2 += w * w;
+  }
+  if (!(sw > 0)) return d;
+  d.mean = sum / sw;
+  d.standard_error = std::sqrt(sw2 * std::max(0.0, sum2 / sw - d.mean * d.mean)) / sw;
+  return d;
+}
+
 }  // namespace prtsub

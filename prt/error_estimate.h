@@ -19,4 +19,15 @@ struct ErrorEstimate {
 //! \throw InputError for shapes that do not match
 ErrorEstimate holdout_error(const Mesh& mesh, const Holdout& holdout, const RowMatrixXd& values);
 
+//! Two sets of values judged on the same held-out samples, paired: the weighted mean over the
+//! samples of ‖f̂_k − a(p_k)‖² − ‖f̂_k − b(p_k)‖², how much lower b's squared error is than a's
+//! (in the values' unit squared), and its standard error. Each sample's own noise cancels in the
+//! difference, and so does most of the spread of the terms, so a difference far too small to
+//! show in either error's standard error can still be told from zero, or not.
+struct ErrorDifference {
+  double mean = 0;
+  double standard_error = 0;
+};
+ErrorDifference holdout_difference(const Mesh& mesh, const Holdout& holdout, const RowMatrixXd& a, const RowMatrixXd& b);
+
 }  // namespace prtsub

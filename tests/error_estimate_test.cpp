@@ -100,6 +100,31 @@ TEST(HoldoutError, NoiseInTheHeldOutValuesIsRemovedAndInterpolationErrorIsNot) {
   EXPECT_GT(100 * std::sqrt(noise) / unshadowed_norm(2), 3 * truth_percent);
 }
 
+TEST(HoldoutError, APairedDifferenceSeesWhatEitherErrorsNoiseHides) {
+  // Exact values a, and b off by δ in each of 4 values (‖Δ‖² = 4δ² everywhere): b's squared error
+  // is 4δ² above a's. The held-out values carry noise far larger, which each error's own standard
+  // error reflects; paired on the same samples, each one's noise cancels but for 2e·Δ.
+  const double noise = 0.01, delta = 0.003;
+  const HeldOut s(linear, noise, 400);
+  const RowMatrixXd a = at_vertices(s.mesh, linear);
+  RowMatrixXd b = a;
+  b.array() += delta;
+  const ErrorDifference d = holdout_difference(s.mesh, s.h, a, b);
+  EXPECT_NEAR(d.mean, -4 * delta * delta, 3 * d.standard_error);
+  EXPECT_LT(d.mean + 2 * d.standard_error, 0.0);  // told apart at two standard errors
+  const ErrorDifference back = holdout_difference(s.mesh, s.h, b, a);
+  EXPECT_DOUBLE_EQ(back.mean, -d.mean);
+  EXPECT_DOUBLE_EQ(back.standard_error, d.standard_error);
+  // Unpaired, each E²'s own standard error (δE² = 2E·δE, unit²) is far wider: per sample the
+  // noise spreads ‖e‖² by noise/√2 and the paired term 2e·Δ by 2δ√noise, √noise/(2√2δ) ≈ 12 times
+  // less (less with the samples' unequal weights; with no pairing it would be 0.7 times).
+  const ErrorEstimate eb = holdout_error(s.mesh, s.h, b);
+  const double unit = unshadowed_norm(2) / 100;
+  const double unpaired = 2 * (eb.percent * unit) * (eb.standard_error * unit);
+  EXPECT_LT(5 * d.standard_error, unpaired);
+  EXPECT_THROW(holdout_difference(s.mesh, s.h, a, RowMatrixXd::Zero(3, 4)), InputError);
+}
+
 TEST(HoldoutError, EmptyOrMismatchedSets) {
   const HeldOut s(linear, 0.0, 2);
   EXPECT_EQ(holdout_error(s.mesh, Holdout{}, at_vertices(s.mesh, linear)).samples, 0u);
