@@ -135,7 +135,7 @@ int cmd_eval_fits(int argc, char** argv) {
   r.set("vertices", mesh.num_vertices());
   r.set("rays_per_vertex", b.transfer.rays);
   r.set("samples", data.samples.size());
-  r.set("sample_rays", b.sample_rays);
+  r.set("sample_rays", data.sample_rays);
   r.set("sample_allocation", sample_allocation_name(data.allocation));
   r.set("pilot_samples", data.plan.pilot_samples);
   r.set("sampled_faces", data.allocation == SampleAllocation::Pilot ? data.plan.sampled_faces : mesh.num_faces());

@@ -41,6 +41,7 @@ void BakeCli::add_common(ArgParser& args) {
               "lights add up) instead of the worst light, eval's metric", &order_lights_);
   add_transfer_options(args, bake.transfer, false);
   args.when_given("--rays", [this] { rays_given_ = true; });
+  args.when_given("--sample-rays", [this] { sample_rays_given_ = true; });
   args.option("--first-rays", "R", "per-vertex early stop: each vertex traces R rays (even), then doubles them while a\n"
               "doubling is worth its rays, up to --rays", &bake.round_rays, 2, 1 << 20);
   args.option("--ray-noise", "P", "early stop: the price of a doubling, as the noise (percent of ||t_unshadowed||) at which\n"
@@ -97,7 +98,8 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle", &s.per_triangle, 0.0, 1e6);
   args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &s.density, 0.0, 1e30);
   args.option("--min-samples", "M", "fit: samples every triangle gets at least", &s.min_per_triangle, size_t(0), size_t(1) << 20);
-  args.option("--sample-rays", "R", "fit: rays per surface sample", &bake.sample_rays, 1, 1 << 20);
+  args.option("--sample-rays", "R", "fit: rays per surface sample [default: the pilot chooses 4, 16 or 32 for the same sample\n"
+              "rays (16 each without it)]", &bake.sample_rays, 1, 1 << 20);
   args.choice("--sample-allocation", "fit: which faces get samples: only those where a pilot pass finds that interpolating\n"
               "the vertex values fails, or every face by area (the paper's)", &bake.allocation,
               {SampleAllocation::Pilot, SampleAllocation::Area}, sample_allocation_name);
@@ -198,6 +200,7 @@ BakeOptions BakeCli::options() const {
         o.order_choice.band_power[static_cast<size_t>(l)] += light.coeffs.row(k).squaredNorm() / 3;  // the channels' mean
   }
   if (rays_fixed_ > 0) o.transfer.rays = rays_fixed_, o.round_rays = 0;
+  if (sample_rays_given_) o.sample_rays_auto = false;
   o.rays_auto = o.target_error > 0 && !rays_given_ && rays_fixed_ == 0 && o.round_rays == 0;
   if (o.round_rays % 2 != 0) throw UsageError("--first-rays: expected an even count, got " + std::to_string(o.round_rays));
   o.bounce.fit_samples = !bounce_vertices_only_;

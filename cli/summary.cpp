@@ -102,7 +102,24 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("fit", fit_method_name(o.method));
   if (o.method == FitMethod::Point) return;
   r.set("samples", data.samples.size());
-  r.set("sample_rays", sample_rays);
+  r.set("sample_rays", data.sample_rays > 0 ? data.sample_rays : sample_rays);
+  const SampleRaysChoice& c = data.plan.sample_rays;
+  r.set("sample_rays_auto", c.rays > 0);
+  if (c.rays > 0) {
+    // Each candidate's cost relative to the chosen one's, and its measured noise.
+    const size_t chosen = size_t(std::find(c.choices.begin(), c.choices.end(), c.rays) - c.choices.begin());
+    std::string trials;
+    char buf[96];
+    for (size_t k = 0; k < c.choices.size() && k < c.cost.size(); ++k) {
+      std::snprintf(buf, sizeof buf, "%s%d: %.2f (noise %.3g)", trials.empty() ? "" : ", ", c.choices[k],
+                    c.cost[chosen] > 0 ? c.cost[k] / c.cost[chosen] : 1.0, c.noise[k]);
+      trials += buf;
+    }
+    r.set("sample_rays_trials", trials);
+    r.set("sample_rays_variation", c.variation);
+    r.set("sample_rays_noise_points", static_cast<uint64_t>(c.points));
+    r.set("sample_rays_noise_rays", c.rays_traced);
+  }
   record_sample_spread(r, data);
   if (o.method != FitMethod::LeastSquares) return;
   r.set("alpha", o.alpha);
@@ -337,6 +354,10 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"  fit:        least squares, {regularizer} regulariser, alpha {alpha}, {mass} mass; {samples} surface "
                      "samples ({sample_rays} rays each, {seconds_samples:3} s)"});
     r.print(stdout, {"              alpha auto: the lowest held-out error of {alpha_trials}"});
+    if (r.format("{sample_rays_auto}") == "yes")
+      r.print(stdout, {"              rays per sample: {sample_rays} for the same sample rays; each choice's modelled error against "
+                       "it and a sample's noise: {sample_rays_trials} (16 is left only below 0.8 of its error); variation "
+                       "{sample_rays_variation}, noise measured on {sample_rays_noise_points} samples ({sample_rays_noise_rays} rays)"});
     if (r.has("pilot_samples"))
       r.print(stdout, {"              pilot: {pilot_samples} of {pilot_samples_drawn} samples traced ({pilot_rays} rays, {seconds_pilot:3} s) found {sampled_faces} "
                        "faces where interpolation fails; {interpolated_faces} left to it",

@@ -149,6 +149,8 @@ BakeOptions resolve_bake_options(const BakeOptions& in) {
   const bool unshadowed = o.unshadowed_projection && o.signal == AssetSignal::Transfer && o.fit.method == FitMethod::LeastSquares;
   o.fit.unshadowed_order = unshadowed ? o.transfer.order : 0;
   o.pilot.exact_unshadowed = unshadowed;
+  if (o.sample_rays_auto) o.pilot.sample_ray_choices.assign(o.sample_ray_choices.begin(), o.sample_ray_choices.end());
+  else o.pilot.sample_ray_choices.clear();
   return o;
 }
 
@@ -224,7 +226,7 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
       m.push_back({"sampled_faces", std::to_string(r.fit_data.plan.sampled_faces)});
       m.push_back({"extra_vertex_rays", std::to_string(r.top_up.rays) + " at " + std::to_string(r.top_up.vertices) + " vertices"});
     }
-    m.push_back({"sample_rays", std::to_string(o.sample_rays)});
+    m.push_back({"sample_rays", std::to_string(r.fit_data.sample_rays > 0 ? r.fit_data.sample_rays : o.sample_rays)});
   }
   if (o.fit.method == FitMethod::LeastSquares && !o.refine_only) {
     std::string alpha = std::to_string(r.simplified && r.simplify.collapses > 0 && (o.refine != Refinement::Auto || r.refine.splits == 0)
@@ -445,6 +447,7 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   if (progress.stage) progress.stage("samples", s.size());
   TransferStats stats;
   r.fit_data.allocation = SampleAllocation::Area;
+  r.fit_data.sample_rays = to.rays;
   r.fit_data.moments = trace_face_moments(r.mesh, scene, s, to, &stats, progress.add);
   r.fit_data.samples = std::move(s);
   r.fit_data.rays = stats.rays;
@@ -512,7 +515,7 @@ void fit_bounced_samples(const RayScene& scene, const BakeOptions& o, const Boun
                          const RowMatrixXd& fitted, const BakeProgress& progress, BakeResult& r) {
   const SurfaceSamples& s = r.fit_data.samples;
   BounceOptions b = bounce;
-  b.rays = o.sample_rays, b.seed = mix64(o.transfer.seed + 23);
+  b.rays = r.fit_data.sample_rays > 0 ? r.fit_data.sample_rays : o.sample_rays, b.seed = mix64(o.transfer.seed + 23);
   if (progress.stage) progress.stage("bounced samples", 0);
   TransferStats st;
   const RowMatrixXd g = gather_bounce(r.mesh, scene, before_last, s.points, s.normals, s.offsets, b, &st);
@@ -556,7 +559,7 @@ size_t add_samples(const RayScene& scene, const BakeOptions& o, int round, const
   so.seed = mix64(o.samples.seed + 0x51A7ull + uint64_t(round));
   const SurfaceSamples more = make_surface_samples(r.mesh, so, d.plan.face_weight);
   TransferOptions to = o.transfer;
-  to.rays = o.sample_rays;
+  to.rays = d.sample_rays;
   to.seed = mix64(mix64(o.transfer.seed ^ 0x5A3D1E5ull) + uint64_t(round));  // independent of every earlier ray
   to.stream_offset = 0;
   if (progress.stage) progress.stage("error target", more.size());
@@ -689,8 +692,14 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions
     double budget = so.density > 0 ? so.density * d.plan.sampled_area : so.per_triangle * double(d.plan.sampled_faces);
     if (d.plan.sampled_faces > 0) budget = std::max(budget, static_cast<double>(o.pilot.min_samples));
     const double wanted = std::max(0.5 * budget, budget - o.pilot.per_triangle * double(d.plan.sampled_faces));
+    // The same sample rays (`wanted` samples at sample_rays each), split as the pilot's
+    // measurements say: fewer rays and more samples where a shadow crosses large faces.
+    if (!d.plan.sample_rays.noise.empty() && wanted > 0) {
+      choose_sample_rays(d.plan.sample_rays, wanted * double(o.sample_rays) / double(d.plan.sampled_faces), o.sample_rays);
+      to.rays = d.plan.sample_rays.rays;
+    }
     so.density = 0;
-    so.per_triangle = mesh.num_faces() ? std::max(0.0, wanted) / double(mesh.num_faces()) : 0;
+    so.per_triangle = mesh.num_faces() ? std::max(0.0, wanted) * double(o.sample_rays) / double(to.rays) / double(mesh.num_faces()) : 0;
     d.samples = make_surface_samples(mesh, so, d.plan.face_weight);
     d.rays += d.plan.rays;
   } else {
@@ -698,6 +707,7 @@ FitData sample_signal(const Mesh& mesh, const RayScene& scene, const BakeOptions
   }
   if (progress.stage) progress.stage("samples", d.samples.size());
   TransferStats stats;
+  d.sample_rays = to.rays;
   d.moments = trace_face_moments(mesh, scene, d.samples, to, &stats, progress.add);
   d.rays += stats.rays;
   d.seconds = clock.total();

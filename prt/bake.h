@@ -101,8 +101,13 @@ struct BakeOptions {
   //! (choose_first_rays), so that a loose target costs a cheap bake (later rounds add what the
   //! hold-out finds missing). The CLI sets it when --error is given without --rays.
   bool rays_auto = false;
-  //! rays per surface sample: many samples with few rays beat the reverse (BENCHMARKS.md)
+  //! rays per surface sample; with the pilot and sample_rays_auto, the budget of sample rays this
+  //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split as the
+  //! pilot's measurements say: the least rays·(variation + noise) of sample_ray_choices
+  //! (choose_sample_rays; 4 where shadows cross large faces, 16 or 32 on smooth scans)
   int sample_rays = 16;
+  bool sample_rays_auto = true;
+  std::array<int, 3> sample_ray_choices = {4, 16, 32};
   //! Transfer with the least-squares fit: the curvature of the unshadowed part t_u(n) inside the
   //! faces, known in closed form, is projected exactly onto the mesh instead of left to
   //! interpolation, and the pilot looks for samples' work only in what is left (FitOptions::
@@ -143,6 +148,7 @@ struct FitData {
   SamplePlan plan;       //!< Pilot: the pilot's findings (its rays are included in `rays`)
   SurfaceSamples samples;
   FaceMoments moments;  //!< the samples' transfer, reduced face by face as it is traced
+  int sample_rays = 0;  //!< rays per sample they were traced with (the pilot's choice, or BakeOptions::sample_rays)
   uint64_t rays = 0;
   double seconds = 0;
 };

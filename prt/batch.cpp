@@ -59,7 +59,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
     << f.weigh_by_noise << " " << non_negative_name(f.non_negative) << "\n";
   s << "samples " << o.samples.per_triangle << " " << o.samples.density << " " << o.samples.min_per_triangle << " " << o.samples.seed << "\n";
   s << "allocation " << sample_allocation_name(o.allocation) << " vertex_share " << o.vertex_share << " target " << o.target_error
-    << " rays_auto " << o.rays_auto << " sample_rays " << o.sample_rays << " unshadowed " << o.unshadowed_projection << " alpha_auto " << o.alpha_auto;
+    << " rays_auto " << o.rays_auto << " sample_rays " << o.sample_rays << " sample_rays_auto " << o.sample_rays_auto << " unshadowed " << o.unshadowed_projection << " alpha_auto " << o.alpha_auto;
   for (double a : o.alpha_choices) s << " " << a;
   s << "\n";
   const PilotOptions& p = o.pilot;

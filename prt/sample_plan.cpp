@@ -31,6 +31,18 @@
 // interpolated): r = f̂(p) − w(p)·t_u(n(p)) − Σ_c h_c(p)(x̂_c − w_c·t_u(n_c)). A face is then sampled
 // for a shadow inside it, not for curvature the projection handles with no rays.
 //
+// The pilot also measures what the rays per fit sample are chosen from (sample_ray_choices;
+// choose_sample_rays decides, given the budget). With B sample rays on a face, Q rays per sample
+// give n = B/Q samples, and a face moment's error is about ‖β‖²/n² + σ²(Q)/n: the variation of
+// the signal about the interpolant, which the face's lattice of samples averages out, and each
+// sample's own noise, independent from sample to sample. Both are measured, not modelled: ‖β‖²
+// is the mean excess d on the sampled faces, and σ²(Q) the mean of ½‖a − b‖² over a subset of the
+// last stage's samples, each traced twice at Q with independent seeds. (The cosine lattice's
+// noise per ray is far from 1/Q: on the shared scenes it falls about 5x from 8 to 16 rays and 3x
+// from 16 to 32, and 8 rays per sample cost more error per ray than 4 on every one. So no power
+// law would do.) A shadow across large faces (conference: ‖β‖² 140x the noise at 16 rays) takes 4
+// rays and four times the samples; a smooth scan's noise-dominated faces take 16 or 32.
+//
 // The pilot's own samples are not reused in the fit: its allocation would depend on their
 // values, and the fit's moments would no longer be unbiased.
 #include "prtsub/prt/sample_plan.h"
@@ -47,6 +59,7 @@
 #include "prtsub/prt/unshadowed_projection.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
+#include "prtsub/subdiv/random.h"
 #include "prtsub/subdiv/stopwatch.h"
 
 namespace prtsub {
@@ -67,6 +80,20 @@ SurfaceSamples make_pilot_samples(const Mesh& mesh, const PilotOptions& o, uint6
   so.min_per_triangle = so.per_triangle >= 1 ? 1 : 0;  // below one per face: by area, and the pools cover the rest
   so.seed = seed;
   return make_surface_samples(mesh, so);
+}
+
+void choose_sample_rays(SampleRaysChoice& c, double face_rays, int given, double keep) {
+  if (c.choices.empty() || c.noise.size() != c.choices.size()) throw InputError("sample rays: one measured noise per candidate is needed");
+  if (!(face_rays > 0) || !std::isfinite(face_rays)) throw InputError("sample rays: the rays per sampled face must be positive");
+  c.cost.assign(c.choices.size(), 0.0);
+  double least = INFINITY;
+  for (size_t i = 0; i < c.choices.size(); ++i) {
+    const double n = face_rays / double(c.choices[i]);
+    c.cost[i] = std::max(c.variation, 0.0) / (n * n) + c.noise[i] / n;
+    if (c.cost[i] < least) least = c.cost[i], c.rays = c.choices[i];
+  }
+  for (size_t i = 0; i < c.choices.size(); ++i)
+    if (c.choices[i] == given && !(least < keep * c.cost[i])) c.rays = given;
 }
 
 SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSamples& pilot, const RowMatrixXd& prior,
@@ -170,7 +197,45 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
         &stage_stats, progress, all ? &pilot.offsets : &offsets);
     stats.rays += stage_stats.rays;
   };
+  // The noise of a fit sample at each candidate ray count: a systematic subset of the samples
+  // traced on faces still in question once the last stage is traced (`in_question`), each traced
+  // twice at Q with seeds of their own, in that stage's phase (a sharded bake gathers them with it).
+  const std::vector<int>& choices = o.sample_ray_choices;
+  for (int q : choices)
+    if (q < 1) throw InputError("sample plan: rays per sample must be positive");
+  std::vector<size_t> measured;
+  std::vector<RowMatrixXd> twice;  // per candidate, its two traces
+  auto measure = [&](const std::vector<char>& in_question) {
+    std::vector<size_t> which;
+    for (size_t k = 0; k < S; ++k)
+      if (traced[k] && in_question[pilot.face[k]]) which.push_back(k);
+    // At most an eighth of the pilot's own rays, and not at all on fewer than 64 points (on a
+    // small mesh, where it would cost more than the choice can gain: the caller's count stands).
+    uint64_t per_point = 0;
+    for (int q : choices) per_point += 2 * uint64_t(q);
+    const uint64_t pilot_rays = uint64_t(std::count(traced.begin(), traced.end(), 1)) * uint64_t(to.rays);  // (not stats: a shard counts its slice)
+    const size_t count = std::min<size_t>({o.noise_points, which.size(), per_point ? size_t(pilot_rays / (8 * per_point)) : 0});
+    if (choices.empty() || count < 64) return;
+    const size_t step = std::max<size_t>(1, (which.size() + count - 1) / count);
+    for (size_t j = 0; j < which.size(); j += step) measured.push_back(which[j]);
+    const auto n = static_cast<Eigen::Index>(measured.size());
+    RowMatrixX3d points(n, 3), normals(n, 3), offsets(n, 3);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const auto k = static_cast<Eigen::Index>(measured[size_t(j)]);
+      points.row(j) = pilot.points.row(k), normals.row(j) = pilot.normals.row(k), offsets.row(j) = pilot.offsets.row(k);
+    }
+    for (size_t c = 0; c < choices.size(); ++c)
+      for (uint64_t t = 0; t < 2; ++t) {
+        TransferOptions m = to;
+        m.rays = choices[c], m.stream_offset = 0, m.streams = nullptr;
+        m.seed = mix64(mix64(to.seed ^ 0x0153C0DEull) + 2 * uint64_t(c) + t);
+        TransferStats st;
+        twice.push_back(shadowed_transfer(scene, points, normals, m, &st, {}, &offsets));
+        plan.sample_rays.rays_traced += st.rays, stats.rays += st.rays;
+      }
+  };
   trace(first, true);
+  if (!two_stages) measure(std::vector<char>(F, 1));
   if (to.log) to.log->barrier(false);  // a sharded bake: what follows reads the first stage
 
   // Per face: the sums of its traced samples' excess and squared noise.
@@ -253,6 +318,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     for (size_t k = 0; k < S; ++k)
       if (!traced[k] && candidate[pilot.face[k]]) second.push_back(k);
     trace(second, false);
+    measure(candidate);
     if (to.log) to.log->barrier(false);
     if (progress) progress(S - first.size() - second.size());  // the untraced rest: the bar completes
     sum_faces();
@@ -282,6 +348,37 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     plan.sampled_area += area[f];
     // (a floor: a face that is sampled only for an unknown noise keeps its minimum)
     if (mean > 0) plan.face_weight[f] = std::max(1e-3, o.area_share + (1 - o.area_share) * raw[f] / mean);
+  }
+  if (!measured.empty() && plan.sampled_faces > 0) {
+    // Over the sampled faces, each pilot sample weighted as the fit's samples will be (their
+    // density follows the face weight, the pilot's follows area).
+    double w = 0, variation = 0;
+    for (size_t k = 0; k < S; ++k) {
+      const double fw = plan.face_weight[pilot.face[k]];
+      if (traced[k] && fw > 0 && std::isfinite(excess[k])) w += fw, variation += fw * excess[k];
+    }
+    SampleRaysChoice& c = plan.sample_rays;
+    c.choices = choices, c.points = measured.size();
+    double wn = 0;
+    std::vector<double> noise_sum(choices.size(), 0.0), d(choices.size());
+    for (size_t j = 0; j < measured.size(); ++j) {
+      const double fw = plan.face_weight[pilot.face[measured[j]]];
+      if (!(fw > 0)) continue;
+      bool finite = true;
+      for (size_t q = 0; q < choices.size(); ++q) {
+        const auto row = static_cast<Eigen::Index>(j);
+        d[q] = 0.5 * (twice[2 * q].row(row) - twice[2 * q + 1].row(row)).squaredNorm();
+        finite &= std::isfinite(d[q]);
+      }
+      if (!finite) continue;
+      wn += fw;
+      for (size_t q = 0; q < choices.size(); ++q) noise_sum[q] += fw * d[q];
+    }
+    if (w > 0 && wn > 0) {
+      c.variation = std::max(0.0, variation / w);
+      for (double& v : noise_sum) v /= wn;
+      c.noise = noise_sum;
+    }
   }
   plan.pilot_drawn = S;
   plan.pilot_samples = size_t(std::count(traced.begin(), traced.end(), 1));

@@ -129,7 +129,10 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "min_angle") o.simplify.min_angle_deg = value.cast<double>();
     else if (key == "simplify_alpha") o.simplified_alpha = value.cast<double>();
     else if (key == "error") o.target_error = value.cast<double>();
-    else if (key == "sample_rays") o.sample_rays = value.cast<int>();
+    else if (key == "sample_rays") {
+      if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.sample_rays_auto = true;
+      else o.sample_rays = value.cast<int>(), o.sample_rays_auto = false;
+    }
     else if (key == "bounces") {
       if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.bounce.until_converged = true, o.bounce.bounces = 16;
       else o.bounce.bounces = value.cast<int>();

@@ -81,6 +81,57 @@ TEST(Bake, AlphaAutoKeepsTheCandidateWhoseFitHasTheLowestHeldOutError) {
   EXPECT_EQ((a.transfer - b.transfer).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Bake, RaysPerSampleAreChosenForTheSameSampleRays) {
+  // The same sample rays, split by what the pilot measures: the choice is the modelled error's
+  // least, the sample rays are what the fixed 16 rays per sample spend, and on an independent
+  // reference the asset is no worse. Both scenes have a few thousand samples (the pilot's floor)
+  // on few sampled faces: many per face, so the variation is averaged out and rays pay (32). The
+  // choice of 4, where many faces share the budget (conference), is SampleRays' closed form.
+  struct Case {
+    Mesh mesh;
+    bool contact;
+  };
+  const Case cases[] = {{test::build(test::merge(test::grid(16, 0.3), test::transformed(test::cube(), 0.3, Eigen::Vector3d(0.35, 0.35, 0.02)))), true},
+                        {sphere_on_plane(), false}};
+  for (const Case& k : cases) {
+    BakeOptions o;
+    o.transfer.rays = 64, o.transfer.threads = 1;
+    o.samples.per_triangle = 2;
+    const BakeResult chosen = bake(k.mesh, o);
+    const SampleRaysChoice& c = chosen.fit_data.plan.sample_rays;
+    ASSERT_EQ(c.cost.size(), 3u);
+    EXPECT_EQ(chosen.fit_data.sample_rays, c.rays);
+    const size_t best = size_t(std::min_element(c.cost.begin(), c.cost.end()) - c.cost.begin());
+    EXPECT_EQ(c.rays, c.choices[best]);
+    EXPECT_EQ(c.rays, 32) << c.variation << " " << c.noise[0] << " " << c.noise[1];
+    EXPECT_GT(c.noise[0], c.noise[1]);
+    EXPECT_GT(c.noise[1], c.noise[2]);
+    o.sample_rays_auto = false;
+    const BakeResult fixed = bake(k.mesh, o);
+    EXPECT_EQ(fixed.fit_data.sample_rays, 16);
+    EXPECT_TRUE(fixed.fit_data.plan.sample_rays.noise.empty());
+    EXPECT_EQ(chosen.fit_data.plan.face_weight, fixed.fit_data.plan.face_weight);
+    const double rays_chosen = double(chosen.fit_data.samples.size()) * chosen.fit_data.sample_rays;
+    const double rays_fixed = double(fixed.fit_data.samples.size()) * fixed.fit_data.sample_rays;
+    EXPECT_NEAR(rays_chosen / rays_fixed, 1.0, 0.01) << rays_chosen << " " << rays_fixed;
+    const RayScene scene(k.mesh.positions, position_triangles(k.mesh));
+    ReferenceOptions ro;
+    ro.points = 4000, ro.rays = 1024, ro.threads = 1;
+    const Reference ref = make_reference(k.mesh, scene, ro);
+    auto error = [&](const BakeResult& b) {
+      return evaluate(ref, vertex_positions(b.mesh), b.mesh.triangles, b.mesh.source_face, b.transfer).rms_percent;
+    };
+    std::printf("%s: %.3f%% at %d rays per sample, %.3f%% at 16\n", k.contact ? "box over a ground" : "sphere on a plane", error(chosen),
+                c.rays, error(fixed));
+    EXPECT_LT(error(chosen), error(fixed));
+    // Any thread count: the same measurements and the same asset.
+    o.sample_rays_auto = true, o.transfer.threads = 2;
+    const BakeResult two = bake(k.mesh, o);
+    EXPECT_EQ(two.fit_data.plan.sample_rays.noise, c.noise);
+    EXPECT_EQ((two.transfer - chosen.transfer).cwiseAbs().maxCoeff(), 0.0);
+  }
+}
+
 TEST(Bake, InMemoryMeshGivesAnAssetWithItsStagesReportedAndNothingElseTouched) {
   const Mesh mesh = sphere_on_plane();
   BakeOptions o;

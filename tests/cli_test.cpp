@@ -46,15 +46,25 @@ TEST_F(Cli, BakeWritesAnAssetAndAReportWithTheDocumentedKeys) {
   for (const char* key : {"triangles_in", "vertices_in", "triangles_out", "vertices_out", "rays", "seconds_total",
                           "seconds_load", "seconds_scene", "seconds_transfer", "seconds_write", "rays_per_second",
                           "defects_zero_area_faces", "defects_non_manifold_edges", "defects_winding_conflicts",
-                          "fit", "samples", "sample_rays", "alpha", "solve_memory_mib", "seconds_fit_factor"})
+                          "fit", "samples", "sample_rays", "sample_rays_auto", "sample_rays_trials", "sample_rays_variation",
+                          "sample_rays_noise_points", "sample_rays_noise_rays", "alpha", "solve_memory_mib", "seconds_fit_factor"})
     EXPECT_NE(json.find(std::string("\"") + key + "\""), std::string::npos) << key;
-  // 16 rays at each vertex, then the pilot's, the samples' (16 each) and the vertices' second round.
+  // 16 rays at each vertex, then the pilot's, the samples' (the rays per sample the pilot chose)
+  // and the vertices' second round.
   auto number = [&](const std::string& key) {
     const size_t at = json.find("\"" + key + "\": ");
     EXPECT_NE(at, std::string::npos) << key;
     return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + key.size() + 4);
   };
-  EXPECT_EQ(number("rays"), double(a.transfer.rows() * 16) + number("pilot_rays") + 16 * number("samples") + number("top_up_rays"));
+  EXPECT_EQ(number("rays"), double(a.transfer.rows() * 16) + number("pilot_rays") + number("sample_rays") * number("samples") + number("top_up_rays"));
+  EXPECT_EQ(json.find("\"sample_rays_auto\": true") != std::string::npos, true);
+  // --sample-rays fixes the count: nothing measured, the samples traced with it.
+  std::string rep8 = dir.path("r8.json");
+  ASSERT_EQ(run({"bake", in, "-o", out, "--order", "3", "--rays", "16", "--sample-rays", "8", "--report", rep8}), 0);
+  const std::string json8 = read_file_bytes(rep8);
+  EXPECT_NE(json8.find("\"sample_rays\": 8,"), std::string::npos);
+  EXPECT_NE(json8.find("\"sample_rays_auto\": false"), std::string::npos);
+  EXPECT_EQ(json8.find("\"sample_rays_trials\""), std::string::npos);
   double faces = 0;
   for (const char* bin : {"0", "1", "2_3", "4_7", "8_15", "16_31", "32_63", "64_up"}) faces += number(std::string("faces_with_samples_") + bin);
   EXPECT_EQ(faces, 82);

@@ -140,7 +140,7 @@ TEST(Interreflection, TheFitSeesBouncedLightUnlessAskedNotTo) {
   const BakeResult samples = bake(mesh, o);
   o.bounce.fit_samples = false;
   const BakeResult vertices = bake(mesh, o);
-  EXPECT_EQ(samples.bounce.sample_rays, 16 * samples.fit_data.samples.size());
+  EXPECT_EQ(samples.bounce.sample_rays, uint64_t(samples.fit_data.sample_rays) * samples.fit_data.samples.size());
   EXPECT_EQ(vertices.bounce.sample_rays, 0u);
   EXPECT_GT((samples.transfer - vertices.transfer).cwiseAbs().maxCoeff(), 1e-3);
   o.fit.method = FitMethod::Point, o.bounce.fit_samples = true;

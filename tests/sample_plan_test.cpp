@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "helpers.h"
 #include "prtsub/subdiv/exceptions.h"
@@ -171,6 +172,115 @@ TEST(SamplePlan, TheSameForAnyThreadCountAndRejectsWhatItCannotUse) {
   EXPECT_THROW(plan(g, bad), InputError);
   EXPECT_EQ(parse_sample_allocation("pilot"), SampleAllocation::Pilot);
   EXPECT_THROW(parse_sample_allocation("everywhere"), InputError);
+}
+
+TEST(SampleRays, TheChoiceHasTheLeastModelledMomentErrorAtTheBudget) {
+  // With B rays per face, Q rays per sample give n = B/Q samples and an error of
+  // variation/n² + noise(Q)/n: the closed form, candidate by candidate.
+  SampleRaysChoice c;
+  c.choices = {4, 16, 32}, c.noise = {0.4, 0.04, 0.011};
+  c.variation = 0.11;
+  choose_sample_rays(c, 256);
+  ASSERT_EQ(c.cost.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    const double n = 256.0 / c.choices[k];
+    EXPECT_DOUBLE_EQ(c.cost[k], 0.11 / (n * n) + c.noise[k] / n);
+  }
+  EXPECT_EQ(c.rays, 16);  // 4: 0.0067 + 0.025; 16: 0.0069 + 0.0025; 32: 0.0138 + 0.0014
+  // A variation that dwarfs the noise (a shadow across large faces): the most samples.
+  c.variation = 50;
+  choose_sample_rays(c, 256);
+  EXPECT_EQ(c.rays, 4);
+  // No variation: the least noise per ray, noise(Q)·Q, here 32's (0.352 against 0.64 and 1.6).
+  c.variation = 0;
+  choose_sample_rays(c, 256);
+  EXPECT_EQ(c.rays, 32);
+  // A negative measured excess is noise about zero: as zero.
+  c.variation = -1;
+  choose_sample_rays(c, 256);
+  EXPECT_EQ(c.rays, 32);
+  // The variation's share falls as 1/n², the noise's as 1/n: a small budget buys samples, a large one rays.
+  c.variation = 1;
+  choose_sample_rays(c, 64);  // 4: 1/256 + 0.4/16; 16: 1/16 + 0.04/4
+  EXPECT_EQ(c.rays, 4);
+  c.variation = 0.11;
+  choose_sample_rays(c, 4096);
+  EXPECT_EQ(c.rays, 32);
+  // Given a count, the choice leaves it only for a modelled error below `keep` (0.8) of its own.
+  c.noise = {0.4, 0.04, 0.011};
+  c.variation = 0;
+  choose_sample_rays(c, 256, 16);  // 32 at 0.55 of 16's: moves
+  EXPECT_EQ(c.rays, 32);
+  choose_sample_rays(c, 256, 16, 0.5);
+  EXPECT_EQ(c.rays, 16);
+  choose_sample_rays(c, 256, 8);  // not a candidate: the least
+  EXPECT_EQ(c.rays, 32);
+  SampleRaysChoice bad = c;
+  bad.noise.pop_back();
+  EXPECT_THROW(choose_sample_rays(bad, 256), InputError);
+  EXPECT_THROW(choose_sample_rays(c, 0), InputError);
+  SampleRaysChoice none;
+  EXPECT_THROW(choose_sample_rays(none, 256), InputError);
+}
+
+TEST(SampleRays, ThePilotMeasuresEachCandidatesNoiseAndTheSampledFacesVariation) {
+  const Ground g(true);
+  PilotOptions o;
+  o.sample_ray_choices = {4, 16};
+  const SamplePlan p = plan(g, o), p2 = plan(g, o, 2);
+  const SampleRaysChoice& c = p.sample_rays;
+  ASSERT_EQ(c.noise.size(), 2u);
+  EXPECT_EQ(c.rays, 0);  // the pilot measures; the budget's owner chooses
+  EXPECT_GT(c.points, 100u);
+  EXPECT_LE(c.points, o.noise_points);
+  EXPECT_EQ(c.rays_traced, 2 * uint64_t(4 + 16) * c.points);
+  EXPECT_EQ(p.rays, uint64_t(o.rays) * p.pilot_samples + c.rays_traced);
+  EXPECT_GT(c.variation, 0.0);
+  EXPECT_EQ(c.noise, p2.sample_rays.noise);  // any thread count
+  EXPECT_EQ(c.variation, p2.sample_rays.variation);
+  EXPECT_EQ(p.face_weight, plan(g).face_weight);  // measuring changes nothing of the plan
+  // Independently: at every pilot point on a sampled face, the variance over 8 seeds, weighted
+  // by the face's weight as the measurement is. The measurement averages about c.points
+  // squared differences, heavy-tailed; 20% is several of its standard errors here.
+  const SurfaceSamples pilot = make_pilot_samples(g.mesh, o, 5);
+  std::vector<size_t> on;
+  for (size_t k = 0; k < pilot.size(); ++k)
+    if (p.face_weight[pilot.face[k]] > 0) on.push_back(k);
+  const auto n = Eigen::Index(on.size());
+  RowMatrixX3d points(n, 3), normals(n, 3), offsets(n, 3);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const auto k = Eigen::Index(on[size_t(j)]);
+    points.row(j) = pilot.points.row(k), normals.row(j) = pilot.normals.row(k), offsets.row(j) = pilot.offsets.row(k);
+  }
+  for (size_t q = 0; q < 2; ++q) {
+    const int seeds = 8;
+    std::vector<RowMatrixXd> runs;
+    for (int s = 0; s < seeds; ++s) {
+      TransferOptions t;
+      t.rays = o.sample_ray_choices[q], t.seed = 1000 + uint64_t(s);
+      runs.push_back(shadowed_transfer(g.scene, points, normals, t, nullptr, {}, &offsets));
+    }
+    double sum = 0, w = 0;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      RowMatrixXd mean = RowMatrixXd::Zero(1, runs[0].cols());
+      for (const RowMatrixXd& r : runs) mean += r.row(j);
+      mean /= seeds;
+      double v = 0;
+      for (const RowMatrixXd& r : runs) v += (r.row(j) - mean).squaredNorm();
+      const double fw = p.face_weight[pilot.face[on[size_t(j)]]];
+      sum += fw * v / (seeds - 1), w += fw;
+    }
+    const double truth = sum / w;
+    std::printf("Q %d: measured %.5g, over 8 seeds %.5g\n", o.sample_ray_choices[q], c.noise[q], truth);
+    EXPECT_NEAR(c.noise[q] / truth, 1.0, 0.2) << "Q " << o.sample_ray_choices[q] << ": " << c.noise[q] << " against " << truth;
+  }
+  EXPECT_GT(c.noise[0], 4 * c.noise[1]);
+  // No candidates, or an open plane (nothing sampled): nothing measured.
+  EXPECT_TRUE(plan(g).sample_rays.noise.empty());
+  EXPECT_TRUE(plan(Ground(false), o).sample_rays.noise.empty());
+  PilotOptions zero = o;
+  zero.sample_ray_choices = {0, 16};
+  EXPECT_THROW(plan(g, zero), InputError);
 }
 
 }  // namespace
