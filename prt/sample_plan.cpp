@@ -37,11 +37,10 @@
 // the signal about the interpolant, which the face's lattice of samples averages out, and each
 // sample's own noise, independent from sample to sample. Both are measured, not modelled: ‖β‖²
 // is the mean excess d on the sampled faces, and σ²(Q) the mean of ½‖a − b‖² over a subset of the
-// last stage's samples, each traced twice at Q with independent seeds. (The cosine lattice's
-// noise per ray is far from 1/Q: on the shared scenes it falls about 5x from 8 to 16 rays and 3x
-// from 16 to 32, and 8 rays per sample cost more error per ray than 4 on every one. So no power
-// law would do.) A shadow across large faces (conference: ‖β‖² 140x the noise at 16 rays) takes 4
-// rays and four times the samples; a smooth scan's noise-dominated faces take 16 or 32.
+// samples on the faces in question, each traced twice at Q with independent seeds. (The cosine
+// lattice's noise is no power law of Q: on the shared scenes it falls 3.6–16x from 4 to 16 rays
+// and 1.9–4.2x from 16 to 32.) A shadow across large faces (conference: ‖β‖² 140x σ²(16)) takes
+// 4 rays and four times the samples; a smooth scan's noise-dominated faces take 32.
 //
 // The pilot's own samples are not reused in the fit: its allocation would depend on their
 // values, and the fit's moments would no longer be unbiased.
