@@ -44,8 +44,8 @@ struct BakeCli {
  private:
   bool no_control_variate_ = false, no_noise_weighting_ = false, bounce_vertices_only_ = false, no_unshadowed_projection_ = false;
   int rays_fixed_ = 0;  // --rays-fixed R: no early stop
-  bool rays_given_ = false;
-  bool sample_rays_given_ = false;  // --sample-rays: else the pilot chooses  // --rays: else --error chooses the first round
+  bool rays_given_ = false;         // --rays: else --error chooses the first round
+  bool sample_rays_given_ = false;  // --sample-rays: else the pilot chooses
   std::string bounces_;  // --bounces N|auto
   std::string albedo_, albedo_map_;  // --albedo A|R,G,B|vertex, --albedo-map PATH
   std::string alpha_ = "auto";       // --alpha A|auto

@@ -102,9 +102,9 @@ struct BakeOptions {
   //! hold-out finds missing). The CLI sets it when --error is given without --rays.
   bool rays_auto = false;
   //! rays per surface sample; with the pilot and sample_rays_auto, the budget of sample rays this
-  //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split as the
-  //! pilot's measurements say: the least rays·(variation + noise) of sample_ray_choices
-  //! (choose_sample_rays; 4 where shadows cross large faces, 16 or 32 on smooth scans)
+  //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split among
+  //! sample_ray_choices as the pilot's measurements say (choose_sample_rays: 4 where shadows cross
+  //! large faces, 32 on smooth scans, else this count)
   int sample_rays = 16;
   bool sample_rays_auto = true;
   std::array<int, 3> sample_ray_choices = {4, 16, 32};

@@ -142,21 +142,24 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   held.face.resize(n_held), held.weight.resize(n_held), held.variance.resize(n_held);
   held.barycentric.resize(static_cast<Eigen::Index>(n_held), 3);
   held.values.resize(static_cast<Eigen::Index>(n_held), K);
+  // The pilot samples `which`: their points, normals and offsets, row by row.
+  auto gather = [&](const std::vector<size_t>& which, RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d& offsets) {
+    const auto n = static_cast<Eigen::Index>(which.size());
+    points.resize(n, 3), normals.resize(n, 3), offsets.resize(n, 3);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const auto k = static_cast<Eigen::Index>(which[size_t(j)]);
+      points.row(j) = pilot.points.row(k), normals.row(j) = pilot.normals.row(k), offsets.row(j) = pilot.offsets.row(k);
+    }
+  };
   auto trace = [&](const std::vector<size_t>& which, bool keep_holdout) {
     const size_t n = which.size();
     const bool all = n == S;  // one stage: the pilot's own arrays and streams, no copies
     RowMatrixX3d points, normals, offsets;
     std::vector<uint64_t> streams;
-    if (!all) {
-      points.resize(static_cast<Eigen::Index>(n), 3), normals.resize(static_cast<Eigen::Index>(n), 3);
-      offsets.resize(static_cast<Eigen::Index>(n), 3), streams.resize(n);
-    }
+    if (!all) gather(which, points, normals, offsets), streams.resize(n);
     for (size_t j = 0; j < n; ++j) {
       traced[which[j]] = 1;
-      if (all) continue;
-      const auto k = static_cast<Eigen::Index>(which[j]), r = static_cast<Eigen::Index>(j);
-      points.row(r) = pilot.points.row(k), normals.row(r) = pilot.normals.row(k), offsets.row(r) = pilot.offsets.row(k);
-      streams[j] = to.stream_offset + which[j];
+      if (!all) streams[j] = to.stream_offset + which[j];
     }
     std::vector<size_t> group_begin;
     for (size_t j = 0; j < n; j += 64) group_begin.push_back(j);
@@ -217,12 +220,8 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     if (choices.empty() || count < 64) return;
     const size_t step = std::max<size_t>(1, (which.size() + count - 1) / count);
     for (size_t j = 0; j < which.size(); j += step) measured.push_back(which[j]);
-    const auto n = static_cast<Eigen::Index>(measured.size());
-    RowMatrixX3d points(n, 3), normals(n, 3), offsets(n, 3);
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const auto k = static_cast<Eigen::Index>(measured[size_t(j)]);
-      points.row(j) = pilot.points.row(k), normals.row(j) = pilot.normals.row(k), offsets.row(j) = pilot.offsets.row(k);
-    }
+    RowMatrixX3d points, normals, offsets;
+    gather(measured, points, normals, offsets);
     for (size_t c = 0; c < choices.size(); ++c)
       for (uint64_t t = 0; t < 2; ++t) {
         TransferOptions m = to;

@@ -51,7 +51,8 @@ struct PilotOptions {
   //! of t_u that needs no rays.
   bool exact_unshadowed = false;
   //! Candidate rays per fit sample (choose_sample_rays): when not empty, each one's noise is
-  //! measured on `noise_points` of the last stage's samples (each traced twice, independently),
+  //! measured on up to `noise_points` of the samples traced on faces still in question after the
+  //! last stage (each traced twice, independently),
   //! and the variation the samples are there to find is the sampled faces' mean excess. The
   //! measurement costs at most an eighth of the pilot's rays, and is skipped below 64 points.
   std::vector<int> sample_ray_choices;
@@ -73,9 +74,8 @@ struct SampleRaysChoice {
 //! rays a face gets n = B/Q samples, and its moments' error is about variation/n² + noise(Q)/n.
 //! The noise is independent from sample to sample (1/n); the samples of a face form a lattice,
 //! so what they see of the signal's variation averages out as 1/n² where it is smooth (and
-//! between 1/n^1.5 and 1/n² across a shadow edge). Measured on the shared scenes, this picks the
-//! better of 4 and 16 rays on 9 of 10 scene/signal pairs; a 1/n variation term would pick 4 on
-//! sibenik and house_on_site, where it loses (docs/fit.md). The model is rough (the variation's
+//! between 1/n^1.5 and 1/n² across a shadow edge). A 1/n variation term would pick 4 on sibenik
+//! and house_on_site, where 4 loses to 16 (docs/fit.md). The model is rough (the variation's
 //! exponent lies between 1.5 and 2), so the choice leaves `given` (when it is a candidate) only for
 //! a modelled error below `keep` times given's: a gain the model is sure of. Fills c.cost and c.rays.
 //! \throw InputError when c holds no measurement (noise and choices of equal, non-zero size) or face_rays ≤ 0
