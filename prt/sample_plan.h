@@ -74,8 +74,8 @@ struct SampleRaysChoice {
 //! rays a face gets n = B/Q samples, and its moments' error is about variation/n² + noise(Q)/n.
 //! The noise is independent from sample to sample (1/n); the samples of a face form a lattice,
 //! so what they see of the signal's variation averages out as 1/n² where it is smooth (and
-//! between 1/n^1.5 and 1/n² across a shadow edge). A 1/n variation term would pick 4 on sibenik
-//! and house_on_site, where 4 loses to 16 (docs/fit.md). The model is rough (the variation's
+//! between 1/n^1.5 and 1/n² across a shadow edge). It keeps 16 on sibenik and house_on_site,
+//! where 4 loses to 16 at the same sample rays (docs/fit.md). The model is rough (the variation's
 //! exponent lies between 1.5 and 2), so the choice leaves `given` (when it is a candidate) only for
 //! a modelled error below `keep` times given's: a gain the model is sure of. Fills c.cost and c.rays.
 //! \throw InputError when c holds no measurement (noise and choices of equal, non-zero size) or face_rays ≤ 0
