@@ -16,6 +16,28 @@ void add_transfer_options(ArgParser& args, TransferOptions& t, bool with_order) 
   add_threads_option(args, t.threads);
 }
 
+namespace {
+const char* denominator_name(ProgressiveOptions::Denominator d) {
+  return d == ProgressiveOptions::Denominator::Interpolated ? "interpolated" : d == ProgressiveOptions::Denominator::Clamped ? "clamped" : "running";
+}
+const char* update_name(bool gauss_seidel) { return gauss_seidel ? "gauss-seidel" : "jacobi"; }
+}  // namespace
+
+void add_estimator_options(ArgParser& args, TransferOptions& t) {
+  args.choice("--estimator", "how each point's rays become coefficients: cv, the control variate; mc, plain Monte Carlo\n"
+              "projection; pls, the progressive least-squares encoder; pls-cv, that encoder on the blocked part only\n"
+              "(docs/transfer.md)", &t.estimator,
+              {TransferEstimator::ControlVariate, TransferEstimator::MonteCarlo, TransferEstimator::Progressive, TransferEstimator::ProgressiveBlocked},
+              estimator_name);
+  args.option("--pls-acceleration", "A", "pls: the encoder's acceleration factor [default 1]", &t.progressive.acceleration, 1e-3, 100.0);
+  args.choice("--pls-update", "pls: residual updated after each coefficient, or once per sample", &t.progressive.gauss_seidel,
+              {true, false}, update_name);
+  args.choice("--pls-denominator", "pls: ∫B² from the samples so far, blended from a bound (the paper's fix), or floored",
+              &t.progressive.denominator,
+              {ProgressiveOptions::Denominator::Interpolated, ProgressiveOptions::Denominator::Running, ProgressiveOptions::Denominator::Clamped},
+              denominator_name);
+}
+
 void add_threads_option(ArgParser& args, int& threads) {
   args.option("--threads", "T", "worker threads, 0 for every core; results do not depend on it", &threads, 0, 1024);
 }
@@ -40,6 +62,7 @@ void BakeCli::add_common(ArgParser& args) {
   args.option("--order-light", "SPEC", "--order auto: errors under this light turned any way (the --light syntax of render;\n"
               "lights add up) instead of the worst light, eval's metric", &order_lights_);
   add_transfer_options(args, bake.transfer, false);
+  add_estimator_options(args, bake.transfer);
   args.when_given("--rays", [this] { rays_given_ = true; });
   args.when_given("--sample-rays", [this] { sample_rays_given_ = true; });
   args.option("--first-rays", "R", "per-vertex early stop: each vertex traces R rays (even), then doubles them while a\n"

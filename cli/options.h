@@ -15,6 +15,8 @@ namespace prtsub {
 
 //! --order (unless without_order), --rays, --seed, --threads into `transfer`.
 void add_transfer_options(ArgParser& args, TransferOptions& transfer, bool with_order = true);
+//! --estimator and the progressive encoder's --pls-* options (bake).
+void add_estimator_options(ArgParser& args, TransferOptions& t);
 
 //! --threads T into `threads` (0: every core).
 void add_threads_option(ArgParser& args, int& threads);

@@ -178,6 +178,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   }
   r.set("rays_per_vertex", o.transfer.rays);
   r.set("seed", o.transfer.seed);
+  r.set("estimator", estimator_name(o.transfer.estimator));
   r.set("crease_angle", mesh.crease_angle_deg);
   r.set("refine", refinement_name(o.refine));
   r.set("triangles_in", mesh.input_triangles);

@@ -163,6 +163,20 @@ TransferOptions first_round(const BakeOptions& o) {
   return t;
 }
 
+std::string estimator_description(const TransferOptions& t) {
+  if (t.estimator == TransferEstimator::ControlVariate) return "cosine-lattice cross-fitted-control-variate";
+  if (t.estimator == TransferEstimator::MonteCarlo) return "plain Monte Carlo projection, independent cosine-weighted directions";
+  char buf[200];
+  const ProgressiveOptions& p = t.progressive;
+  std::snprintf(buf, sizeof buf, "progressive least-squares (Roughton 2020)%s, %s, acceleration %g, %s denominator",
+                t.estimator == TransferEstimator::ProgressiveBlocked ? " of the blocked part" : "", p.gauss_seidel ? "Gauss-Seidel" : "Jacobi",
+                p.acceleration,
+                p.denominator == ProgressiveOptions::Denominator::Interpolated ? "interpolated"
+                : p.denominator == ProgressiveOptions::Denominator::Clamped    ? "clamped"
+                                                                               : "running");
+  return buf;
+}
+
 Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   Metadata m = o.signal == AssetSignal::Ao ? ao_metadata() : sh_convention_metadata(o.transfer.order);
   m.push_back({"source", o.source.empty() ? "(in memory)" : o.source});
@@ -177,7 +191,7 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   m.push_back({"threads", std::to_string(o.transfer.threads) + " (results do not depend on it)"});
   m.push_back({"crease_angle", std::to_string(r.mesh.crease_angle_deg)});
   m.push_back({"normals", r.mesh.normals_from_file ? "file" : "computed"});
-  m.push_back({"estimator", "cosine-lattice cross-fitted-control-variate"});
+  m.push_back({"estimator", estimator_description(o.transfer)});
   if (o.order_auto && r.order.order > 0) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "%d (what it leaves out, %.3f%% of ||t_unshadowed||, %s %.3f%%%s; pilot of %zu vertices to order %d)",

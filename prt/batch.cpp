@@ -46,6 +46,8 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s.precision(17);
   s << "version " << kVersion << "\nformat " << lower(fs::path(output).extension().string()) << "\n";
   s << "order " << o.transfer.order << " rays " << o.transfer.rays << " seed " << o.transfer.seed << "\n";
+  s << "estimator " << estimator_name(o.transfer.estimator) << " " << o.transfer.progressive.acceleration << " "
+    << o.transfer.progressive.gauss_seidel << " " << int(o.transfer.progressive.denominator) << "\n";
   s << "order_auto " << o.order_auto << " " << o.order_choice.max_order << " " << o.order_choice.tolerance_percent << " "
     << o.order_choice.pilot_points;
   for (double p : o.order_choice.band_power) s << " " << p;

@@ -66,3 +66,12 @@ Eigen::Vector3d cosine_direction(double u, double v) {
 }
 
 }  // namespace prtsub
+
+namespace prtsub {
+
+Eigen::Vector3d uniform_hemisphere_direction(double u, double v) {
+  const double z = 1.0 - u, r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = 2.0 * M_PI * v;
+  return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+}  // namespace prtsub

@@ -36,4 +36,8 @@ Eigen::Vector2d doubling_lattice_point(uint32_t n, uint32_t base, const std::vec
 //! lattice), so estimators built on it are unbiased.
 Eigen::Vector3d cosine_direction(double u, double v);
 
+//! The uniformly distributed direction on the hemisphere (z = normal) for (u, v) ∈ [0,1)²:
+//! z = 1 − u (equal solid angle per unit of u), azimuth 2πv.
+Eigen::Vector3d uniform_hemisphere_direction(double u, double v);
+
 }  // namespace prtsub

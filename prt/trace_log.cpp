@@ -74,6 +74,11 @@ uint64_t trace_fingerprint(const RowMatrixX3d& points, const RowMatrixX3d& norma
                            uint64_t(o.first_round_rays), offsets ? 1u : 0u, group_begin ? group_begin->size() : 0,
                            o.streams ? o.streams->size() : 0};
   add(head, sizeof head);
+  if (o.estimator != TransferEstimator::ControlVariate) {  // the default's fingerprints stay as they were
+    const double encoder[] = {double(o.estimator), o.progressive.acceleration, double(o.progressive.gauss_seidel),
+                              double(o.progressive.denominator)};
+    add(encoder, sizeof encoder);
+  }
   add(points.data(), sizeof(double) * size_t(points.size()));
   add(normals.data(), sizeof(double) * size_t(normals.size()));
   if (offsets) add(offsets->data(), sizeof(double) * size_t(offsets->size()));

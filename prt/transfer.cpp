@@ -23,6 +23,11 @@
 // the total would. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
 // 20-45% faster than single rays.
 //
+// Other estimators, for comparison (docs/transfer.md, BENCHMARKS.md "Estimators"): plain Monte
+// Carlo projection over independent directions, and the progressive least-squares encoder of
+// paper 004 (progressive_encoder.h) on a uniform sphere, over the whole integrand or only its
+// blocked part against the same closed-form unshadowed transfer.
+//
 // Points can also be traced in consecutive groups that a callback consumes as soon as a group is
 // done (shadowed_transfer_groups): the fit reduces each group of surface samples to its face's
 // moments and never stores per-sample transfer. A group is traced by one thread, in order.
@@ -36,6 +41,7 @@
 #include <unordered_map>
 
 #include "prtsub/prt/parallel.h"
+#include "prtsub/prt/progressive_encoder.h"
 #include "prtsub/prt/sampling.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/trace_log.h"
@@ -82,6 +88,10 @@ RaySequence ray_sequence(const TransferOptions& o) {
   return q;
 }
 
+uint64_t point_stream(const TransferOptions& o, Eigen::Index i) {
+  return o.streams ? (*o.streams)[static_cast<size_t>(i)] : o.stream_offset + static_cast<uint64_t>(i);
+}
+
 struct PointRays {
   std::vector<RTCRay> rays;
   std::vector<Eigen::Vector3d> directions;  // world, double: used for SH
@@ -98,13 +108,26 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
   Eigen::Vector3f local = scene.to_local(points.row(i).transpose());
   const Eigen::Vector3d away = offsets ? Eigen::Vector3d(offsets->row(i).transpose()) : n;
   Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
-  Rng rng(opt.seed, opt.streams ? (*opt.streams)[static_cast<size_t>(i)] : opt.stream_offset + static_cast<uint64_t>(i));
+  const uint64_t stream = point_stream(opt, i);
+  Rng rng(opt.seed, stream);
   const double shift[2][2] = {{rng.uniform(), rng.uniform()}, {rng.uniform(), rng.uniform()}};
+  // Plain Monte Carlo draws independent directions instead, from a stream of their own; a later
+  // round skips the draws of the rays before it.
+  Rng independent(opt.seed ^ 0x5D1A7E6C0FFEE123ull, stream);
+  if (opt.estimator == TransferEstimator::MonteCarlo)
+    for (uint64_t k = 0; k < 2ull * seq.first; ++k) independent.next();
+  const bool uniform = opt.estimator == TransferEstimator::Progressive || opt.estimator == TransferEstimator::ProgressiveBlocked;
   for (uint32_t k = 0; k < R; ++k) {
-    const uint32_t g = seq.first + k, h = g & 1;
-    const Eigen::Vector2d uv = doubling_lattice_point(g >> 1, seq.base[h], seq.generators[h]);
-    const double u = uv.x() + shift[h][0], v = uv.y() + shift[h][1];
-    const Eigen::Vector3d d = cosine_direction(u - std::floor(u), v - std::floor(v));
+    Eigen::Vector3d d;
+    if (opt.estimator == TransferEstimator::MonteCarlo) {
+      const double u = independent.uniform();
+      d = cosine_direction(u, independent.uniform());
+    } else {
+      const uint32_t g = seq.first + k, h = g & 1;
+      const Eigen::Vector2d uv = doubling_lattice_point(g >> 1, seq.base[h], seq.generators[h]);
+      const double u = uv.x() + shift[h][0], v = uv.y() + shift[h][1];
+      d = uniform ? uniform_hemisphere_direction(u - std::floor(u), v - std::floor(v)) : cosine_direction(u - std::floor(u), v - std::floor(v));
+    }
     Eigen::Vector3d w = (d.x() * t + d.y() * b + d.z() * n).normalized();
     buf.directions[k] = w;
     init_occlusion_ray(buf.rays[k], origin, w.cast<float>());
@@ -118,15 +141,113 @@ inline bool occluded(const RTCRay& r) { return r.tfar == -std::numeric_limits<fl
 
 }  // namespace
 
+const char* estimator_name(TransferEstimator e) {
+  switch (e) {
+    case TransferEstimator::ControlVariate: return "cv";
+    case TransferEstimator::MonteCarlo: return "mc";
+    case TransferEstimator::Progressive: return "pls";
+    case TransferEstimator::ProgressiveBlocked: return "pls-cv";
+  }
+  return "?";
+}
+
+TransferEstimator estimator_from_name(const std::string& name) {
+  for (TransferEstimator e : {TransferEstimator::ControlVariate, TransferEstimator::MonteCarlo, TransferEstimator::Progressive,
+                              TransferEstimator::ProgressiveBlocked})
+    if (name == estimator_name(e)) return e;
+  throw InputError("estimator must be cv, mc, pls or pls-cv, got '" + name + "'");
+}
+
 void check_transfer_options(const TransferOptions& o) {
   if (o.order < 1 || o.order > kMaxShOrder)
     throw InputError("SH order must be between 1 and " + std::to_string(kMaxShOrder) + ", got " + std::to_string(o.order));
   if (o.rays < 1 || o.rays > (1 << 20))
     throw InputError("rays per point must be between 1 and 1048576, got " + std::to_string(o.rays));
   if (o.threads < 0) throw InputError("thread count must be 0 (every core) or more, got " + std::to_string(o.threads));
+  if (o.progressive.non_negative)
+    throw InputError("non-negative encoding is for bases of non-negative lobes; SH transfer coefficients are signed");
+  if (!(o.progressive.acceleration > 0) || !std::isfinite(o.progressive.acceleration))
+    throw InputError("the progressive encoder's acceleration must be positive, got " + std::to_string(o.progressive.acceleration));
 }
 
 namespace {
+
+// The encoder per thread, rebuilt when the order or the options change.
+struct EncoderSet {
+  int order = 0;
+  ProgressiveOptions options;
+  std::vector<ProgressiveEncoder> encoders;  // the whole set, the even half, the odd half
+  std::vector<uint32_t> order_of_rays;
+};
+
+bool same_options(const ProgressiveOptions& a, const ProgressiveOptions& b) {
+  return a.acceleration == b.acceleration && a.gauss_seidel == b.gauss_seidel && a.non_negative == b.non_negative &&
+         a.denominator == b.denominator;
+}
+
+// The progressive estimators: the hemisphere's directions in a random order per point (a lattice
+// fed in its own order would sweep the sphere and bias a 1/k-step iteration), each followed by
+// its mirror below the horizon, where the integrand is 0 and no ray is needed. With a variance
+// wanted, the even and odd rays are also encoded apart and compared as the control variate's
+// halves are: t = (t_A + t_B)/2 is not how the whole set encodes, but it is the whole set's
+// spread that matters, and the halves are each an estimate of half the rays.
+void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, const TransferOptions& opt, const PointRays& buf,
+                                double* row, double* variance) {
+  const int K = sh_count(opt.order);
+  const uint32_t R = static_cast<uint32_t>(opt.rays);
+  const bool blocked = opt.estimator == TransferEstimator::ProgressiveBlocked;
+  thread_local EncoderSet set;
+  if (set.order != opt.order || !same_options(set.options, opt.progressive)) {
+    std::vector<double> mean_square(size_t(K), 1.0 / (4 * M_PI)), start(static_cast<size_t>(K), 0.0);
+    for (int l = 0; l < opt.order; ++l)
+      for (int m = -l; m <= l; ++m) start[size_t(sh_index(l, m))] = (2 * l + 1) / (4 * M_PI);  // Σ_m y_lm² = (2l+1)/4π
+    set.encoders.assign(3, ProgressiveEncoder(K, 1, opt.progressive, mean_square, start));
+    set.order = opt.order, set.options = opt.progressive;
+  }
+  for (ProgressiveEncoder& e : set.encoders) e.reset();
+  const Eigen::Vector3d n = normals.row(i).transpose();
+  double unshadowed[kMaxShOrder * kMaxShOrder];
+  unshadowed_transfer(opt.order, n, unshadowed);
+  uint32_t any_blocked = 0;
+  for (uint32_t k = 0; k < R; ++k) any_blocked += occluded(buf.rays[k]);
+  const uint32_t size[2] = {(R + 1) / 2, R / 2};
+  if (blocked && any_blocked == 0) {  // nothing to encode: the coefficients stay 0 exactly
+    std::copy(unshadowed, unshadowed + K, row);
+    if (variance) *variance = size[1] ? 0.0 : INFINITY;
+    return;
+  }
+  set.order_of_rays.resize(R);
+  for (uint32_t k = 0; k < R; ++k) set.order_of_rays[k] = k;
+  Rng shuffle(opt.seed ^ 0xA24BAED4963EE407ull, point_stream(opt, i) + (uint64_t(opt.first_ray) << 40));
+  for (uint32_t k = R; k > 1; --k) std::swap(set.order_of_rays[k - 1], set.order_of_rays[uint32_t(shuffle.next() % k)]);
+  double y[kMaxShOrder * kMaxShOrder];
+  const double zero = 0.0;
+  for (uint32_t k : set.order_of_rays) {
+    const Eigen::Vector3d& d = buf.directions[k];
+    const double c = std::max(0.0, d.dot(n));
+    const double value = occluded(buf.rays[k]) == blocked ? c : 0.0;
+    sh_eval(opt.order, d.x(), d.y(), d.z(), y);
+    set.encoders[0].add(y, &value);
+    if (variance) set.encoders[1 + (k & 1)].add(y, &value);
+    const Eigen::Vector3d below = d - 2.0 * d.dot(n) * n;
+    sh_eval(opt.order, below.x(), below.y(), below.z(), y);
+    set.encoders[0].add(y, &zero);
+    if (variance) set.encoders[1 + (k & 1)].add(y, &zero);
+  }
+  const std::vector<double>& b = set.encoders[0].coefficients();
+  for (int c = 0; c < K; ++c) row[c] = blocked ? unshadowed[c] - b[size_t(c)] : b[size_t(c)];
+  if (!variance) return;
+  if (size[1] == 0) {
+    *variance = INFINITY;
+    return;
+  }
+  double d2 = 0;
+  for (int c = 0; c < K; ++c) {
+    const double d = set.encoders[1].coefficients()[size_t(c)] - set.encoders[2].coefficients()[size_t(c)];
+    d2 += d * d;
+  }
+  *variance = d2 * size[0] * size[1] / (double(R) * R);
+}
 
 // One point's transfer into row (K values), and optionally its estimated variance (summed over
 // the K values): the two halves are each an unbiased estimate, t = (n_A t_A + n_B t_B) / R, so
@@ -139,13 +260,19 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
   double acc[kMaxShOrder * kMaxShOrder], acc_a[kMaxShOrder * kMaxShOrder];
   const uint32_t R = static_cast<uint32_t>(opt.rays);
   trace_point(scene, points, normals, offsets, i, opt, seq, buf);
+  if (opt.estimator == TransferEstimator::Progressive || opt.estimator == TransferEstimator::ProgressiveBlocked) {
+    progressive_point_transfer(normals, i, opt, buf, row, variance);
+    return;
+  }
   // Visible counts of the even (A) and odd (B) halves.
   uint32_t visible[2] = {0, 0}, size[2] = {(R + 1) / 2, R / 2};
   for (uint32_t k = 0; k < R; ++k) visible[k & 1] += !occluded(buf.rays[k]);
-  // β of a half comes from the other half; with a single ray there is no other half.
+  // β of a half comes from the other half; with a single ray there is no other half. Plain
+  // Monte Carlo has none: β = 0, every visible ray counted.
   double beta[2];
   beta[0] = size[1] ? (2 * visible[1] >= size[1] ? 1.0 : 0.0) : 1.0;
   beta[1] = 2 * visible[0] >= size[0] ? 1.0 : 0.0;
+  if (opt.estimator == TransferEstimator::MonteCarlo) beta[0] = beta[1] = 0.0;
   std::fill(acc, acc + K, 0.0);
   std::fill(acc_a, acc_a + K, 0.0);
   for (uint32_t k = 0; k < R; ++k) {

@@ -3,18 +3,46 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
+#include "prtsub/prt/progressive_encoder.h"
 #include "prtsub/prt/ray_scene.h"
 
 namespace prtsub {
 
 class TraceLog;
 
+//! How a point's rays become its N² coefficients (docs/transfer.md compares them).
+enum class TransferEstimator {
+  //! "cv" (the default): cosine-weighted lattice directions, the closed-form unshadowed transfer
+  //! as a control variate chosen by the other half's visible share.
+  ControlVariate,
+  //! "mc": plain Monte Carlo projection, (π/R) Σ V_k y(ω_k) over independent cosine-weighted
+  //! directions. The textbook baseline.
+  MonteCarlo,
+  //! "pls": the progressive least-squares encoder (progressive_encoder.h) fed V·max(n·ω, 0) on a
+  //! uniform sphere: the lattice's directions on the hemisphere, each with its mirror image below
+  //! the horizon (value 0, no ray), in a random order per point.
+  Progressive,
+  //! "pls-cv": the same encoder fed only the blocked part, (1 − V)·max(n·ω, 0), subtracted from
+  //! the closed-form unshadowed transfer: exact where nothing is blocked.
+  ProgressiveBlocked,
+};
+
+//! "cv", "mc", "pls", "pls-cv".
+const char* estimator_name(TransferEstimator e);
+//! 	hrow InputError naming the accepted names
+TransferEstimator estimator_from_name(const std::string& name);
+
 struct TransferOptions {
   int order = 4;       //!< SH order N (N² coefficients), 1..10
   int rays = 256;      //!< rays per point
   uint64_t seed = 0;   //!< the result is a function of (seed, point index), not of threads
+  TransferEstimator estimator = TransferEstimator::ControlVariate;
+  //! The encoder's options for the two progressive estimators (non_negative is refused: SH
+  //! coefficients are signed).
+  ProgressiveOptions progressive;
   int threads = 0;     //!< 0: every core
   //! Point i draws its directions from stream stream_offset + i: give refinement's new
   //! vertices their render-vertex index, so their rays do not depend on batching.

@@ -114,6 +114,8 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "first_rays") o.round_rays = value.cast<int>();
     else if (key == "ray_noise") o.stop_noise_percent = value.cast<double>();
     else if (key == "seed") o.transfer.seed = value.cast<uint64_t>();
+    else if (key == "estimator") o.transfer.estimator = estimator_from_name(value.cast<std::string>());
+    else if (key == "pls_acceleration") o.transfer.progressive.acceleration = value.cast<double>();
     else if (key == "threads") o.transfer.threads = value.cast<int>();
     else if (key == "signal") o.signal = parse_asset_signal(value.cast<std::string>());
     else if (key == "fit") o.fit.method = parse_fit_method(value.cast<std::string>());

@@ -744,3 +744,29 @@ TEST_F(Cli, ViewWritesOnePageThatHoldsTheAssetAndEscapesItsName) {
 
 }  // namespace
 }  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+TEST(CliEstimator, TheEstimatorIsChosenReportedAndRecordedInTheAsset) {
+  test::TempDir dir;
+  const std::string in = dir.path("scene.obj"), out = dir.path("a.ply"), rep = dir.path("r.json");
+  test::write_obj(in, test::merge(test::icosphere(1), test::quad(3.0, -1.0, true)));
+  ASSERT_EQ(test::run_prtsub({"bake", in, "-o", out, "--fit", "point", "--rays", "16", "--estimator", "pls-cv", "--pls-update", "jacobi",
+                              "--report", rep}),
+            0);
+  EXPECT_NE(read_file_bytes(rep).find("\"estimator\": \"pls-cv\""), std::string::npos);
+  bool recorded = false;
+  for (const auto& [k, v] : read_asset(out).metadata)
+    recorded |= k == "estimator" && v.find("progressive least-squares (Roughton 2020) of the blocked part, Jacobi") == 0;
+  EXPECT_TRUE(recorded);
+  // The default's record is unchanged; a bad name is one line and exit 2 with nothing written.
+  ASSERT_EQ(test::run_prtsub({"bake", in, "-o", out, "--fit", "point", "--rays", "16", "--report", rep}), 0);
+  EXPECT_NE(read_file_bytes(rep).find("\"estimator\": \"cv\""), std::string::npos);
+  const std::string none = dir.path("none.ply");
+  EXPECT_NE(test::run_prtsub({"bake", in, "-o", none, "--estimator", "lsq"}), 0);
+  EXPECT_FALSE(std::filesystem::exists(none));
+}
+
+}  // namespace
+}  // namespace prtsub
