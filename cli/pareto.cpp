@@ -74,14 +74,20 @@ std::string html_section(const std::vector<ParetoRun>& runs, const std::vector<s
     if (r.series == "grid") grid.points.push_back({r.seconds, r.rms});
   series.push_back(grid);
   series.push_back(edge);
+  // The axis stops at twice the worst of the tool's own runs: point-sampled grid runs can be
+  // several times worse and would squash the runs that matter onto one line.
+  double worst = 0;
   for (const ParetoRun& r : runs)
-    if (r.series != "grid") series.push_back({r.label, {{r.seconds, r.rms}}, false, 6, false});
+    if (r.series != "grid") {
+      series.push_back({r.label, {{r.seconds, r.rms}}, false, 6, false});
+      if (std::isfinite(r.rms)) worst = std::max(worst, r.rms);
+    }
   std::ostringstream html;
   html << "<h2>Speed against error</h2><p>Eval error against bake seconds. Grey: every fixed setting of the grid (R rays per vertex; "
           "S samples per triangle on every face by area with Q rays each, fitted, or none: point sampling). The line joins the grid's "
           "front: no grid run is both faster and more accurate. Each coloured marker is one run of the tool's own choices; the table "
           "sets it against the front at its own time (log-log interpolation).</p>"
-       << svg_loglog(series, "bake seconds", "RMS error (%)");
+       << svg_loglog(series, "bake seconds", "RMS error (%)", 760, 440, 2 * worst);
   html << "<table><tr><th>run</th><th>seconds</th><th>rays</th><th>RMS %</th><th>predicted %</th><th>front's RMS % at its time</th>"
           "<th>run / front</th></tr>";
   for (const ParetoRun& r : runs) {

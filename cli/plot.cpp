@@ -59,13 +59,23 @@ std::string marker(int k, double x, double y, double r, const std::string& colou
 
 }  // namespace
 
-std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string& xlabel, const std::string& ylabel, int width, int height) {
+std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string& xlabel, const std::string& ylabel, int width, int height,
+                       double y_limit) {
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  size_t above = 0;
+  const bool limited = y_limit > 0 && std::isfinite(y_limit);
   for (const PlotSeries& s : series)
     for (auto [x, y] : s.points)
-      if (x > 0 && y > 0 && std::isfinite(x) && std::isfinite(y))
-        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+      if (x > 0 && y > 0 && std::isfinite(x) && std::isfinite(y)) {
+        x0 = std::min(x0, x), x1 = std::max(x1, x);
+        if (limited && y > y_limit) {
+          ++above;
+          continue;
+        }
+        y0 = std::min(y0, y), y1 = std::max(y1, y);
+      }
   if (x0 > x1) return "<p>(no data)</p>";
+  if (above > 0) y1 = y_limit, y0 = std::min(y0, y_limit);
   // 6% of the log range on each side (at least a tenth of a decade in all), so no point sits on the frame.
   auto pad = [](double& lo, double& hi) {
     const double span = std::max(std::log10(hi) - std::log10(lo), 0.1 / 0.88);
@@ -110,6 +120,9 @@ std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string&
       o << "<text x='" << L - 5 << "' y='" << num(py(y) + 4) << "' text-anchor='end'>" << tick(y) << "</text>";
     }
   o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << html_escape(xlabel) << "</text>";
+  if (above > 0)
+    o << "<text x='" << W - R + 12 << "' y='" << H - 12 << "' font-size='11'>" << above << (above == 1 ? " point" : " points") << " above "
+      << tick(y_limit) << ": \u25B2 on the top edge</text>";
   o << "<text transform='rotate(-90)' x='" << -(T + H - B) / 2 << "' y='18' text-anchor='middle'>" << html_escape(ylabel) << "</text>";
   std::vector<size_t> order(series.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -126,12 +139,17 @@ std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string&
     for (auto p : s.points)
       if (p.first > 0 && p.second > 0 && std::isfinite(p.first) && std::isfinite(p.second)) pts.push_back(p);
     std::sort(pts.begin(), pts.end());
+    // Above the limit: on the top edge (the frame's top is y1, padded), as an upward triangle.
+    auto ty = [&](double y) { return above > 0 && y > y_limit ? double(T) : py(y); };
     if (s.line && pts.size() > 1) {
       o << "<polyline fill='none' stroke='" << col << "' stroke-width='" << (s.muted ? 1 : 1.8) << "' points='";
-      for (auto [x, y] : pts) o << num(px(x)) << "," << num(py(y)) << " ";
+      for (auto [x, y] : pts) o << num(px(x)) << "," << num(ty(y)) << " ";
       o << "'/>";
     }
-    for (auto [x, y] : pts) o << marker(shape, px(x), py(y), s.muted ? std::min(s.marker, 2.5) : s.marker, col);
+    for (auto [x, y] : pts) {
+      const double r = s.muted ? std::min(s.marker, 2.5) : s.marker;
+      o << (above > 0 && y > y_limit ? marker(2, px(x), T + 1.2 * r, r, col) : marker(shape, px(x), py(y), r, col));
+    }
     const double ly = T + 14 + 20 * legend++;
     if (s.line) o << "<line x1='" << W - R + 12 << "' x2='" << W - R + 40 << "' y1='" << ly << "' y2='" << ly << "' stroke='" << col << "' stroke-width='2'/>";
     o << marker(shape, W - R + 26, ly, s.muted ? 2.5 : 4, col);

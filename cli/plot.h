@@ -22,7 +22,10 @@ std::string format_number(double v, int digits = 4);
 
 //! A log-log plot of `series` in a `width` × `height` SVG element; "<p>(no data)</p>" when no
 //! point is positive.
+//! `y_limit` > 0: the y axis stops there, and points above it are drawn on the top edge as
+//! upward triangles (lines flattened there too), counted in a note under the frame, so that a few
+//! far worse runs do not squash the ones that matter onto one line.
 std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string& xlabel, const std::string& ylabel, int width = 760,
-                       int height = 440);
+                       int height = 440, double y_limit = 0);
 
 }  // namespace prtsub

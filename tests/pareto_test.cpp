@@ -92,6 +92,35 @@ TEST(Plot, EveryNamedSeriesHasItsOwnColourAndMarkerAndALegendLine) {
   EXPECT_EQ(svg_loglog({{"empty", {{0, 1}, {-1, 2}}}}, "x", "y"), "<p>(no data)</p>");
 }
 
+TEST(Plot, PointsAboveTheLimitSitOnTheTopEdgeAndAreCounted) {
+  // Two runs near 7% and one at 45%: limited at 14, the axis spans 7–14 (padded), the 45% point
+  // is an upward triangle on the frame's top (y = 20), and a note counts it.
+  const std::vector<PlotSeries> series{{"runs", {{1, 7}, {2, 7.2}, {0.5, 45}}, true, 4, false}};
+  const std::string limited = svg_loglog(series, "s", "e", 760, 440, 14), full = svg_loglog(series, "s", "e");
+  EXPECT_NE(limited.find("1 point above 14"), std::string::npos);
+  EXPECT_EQ(full.find("above"), std::string::npos);
+  // No y tick label above the limit: 20 and 50 are labelled only without it.
+  EXPECT_EQ(limited.find(">20</text>"), std::string::npos);
+  EXPECT_NE(full.find(">20</text>"), std::string::npos);
+  // The two near 7% are 2.7 times further apart on the limited axis.
+  auto ys = [](const std::string& svg) {
+    std::vector<double> out;
+    for (size_t at = svg.find("<circle cx='"); at != std::string::npos; at = svg.find("<circle cx='", at + 1))
+      out.push_back(std::stod(svg.substr(svg.find("cy='", at) + 4)));
+    return out;
+  };
+  // Markers in x order: the full plot's first circle is the 45% run, the limited plot's a triangle.
+  const std::vector<double> a = ys(limited), b = ys(full);
+  ASSERT_GE(a.size(), 2u);
+  ASSERT_GE(b.size(), 3u);
+  EXPECT_GT(std::abs(a[0] - a[1]), 2.5 * std::abs(b[1] - b[2]));  // the spans: log(45/7) against log(14/7)
+  // The clipped point is a triangle whose apex is on the frame's top edge's band.
+  const size_t tri = limited.find("<polygon points='");
+  ASSERT_NE(tri, std::string::npos);
+  const std::string pts = limited.substr(tri + 17, 40);
+  EXPECT_NEAR(std::stod(pts.substr(pts.find(',') + 1)), 20.0, 1.0);
+}
+
 TEST(Plot, TickLabelsNeverRunTogether) {
   // 1,500 to 20,000 triangles: a decade and a bit, so gridlines at every mantissa 1..9, which
   // crowd towards 10,000. Each x label sits at least its own width (8 px a character) from the last.
