@@ -508,7 +508,7 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
         plan_top_up(smoothed_variance(r.mesh, r.point_variance, r.vertex_rays), r.vertex_rays, static_cast<uint64_t>(budget), vertex_areas(r.mesh),
                     16.0 * o.transfer.rays);
     if (progress.stage) progress.stage("vertex rays", plan.vertices);
-    r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.transfer, r.point_variance, r.vertex_rays, progress.add);
+    r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.transfer, r.point_variance, r.vertex_rays, progress.add, &r.point_halves);
     r.rays += r.top_up.rays;
     r.seconds_top_up = clock.lap();
   }
@@ -633,7 +633,7 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
     const TopUpPlan plan = plan_top_up_to_variance(planning, r.vertex_rays, want, r.point_variance, w, max_rays);
     if (plan.rays == 0) break;
     if (progress.stage) progress.stage("error target", plan.vertices);  // each vertex's lattice continued
-    const TopUpStats st = apply_top_up(r.mesh, scene, first_round(o), plan, r.point, r.point_variance, r.vertex_rays, progress.add);
+    const TopUpStats st = apply_top_up(r.mesh, scene, first_round(o), plan, r.point, r.point_variance, r.vertex_rays, progress.add, &r.point_halves);
     r.rays += st.rays, r.target_rays += st.rays, ++r.target_rounds;
     r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, o.fit, &r.fit, &r.point_variance);
     r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
@@ -769,7 +769,8 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   }
   if (progress.stage) progress.stage("transfer", r.mesh.num_vertices());
   const TransferOptions first = first_round(o);
-  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, first, &stats, progress.add, &offsets, &r.point_variance);
+  r.transfer = shadowed_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, first, &stats, progress.add, &offsets, &r.point_variance,
+                                 &r.point_halves);
   r.rays += stats.rays;
   r.vertex_rays.assign(r.mesh.num_vertices(), first.rays);
   if (early_stop_on(o)) {  // the order is known: so is the variance to stop at
@@ -777,7 +778,8 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     if (progress.stage) progress.stage("early stop", 0);
     std::function<void()> barrier;
     if (o.transfer.log) barrier = [&] { o.transfer.log->barrier(false); };
-    r.early_stop = early_stop_vertices(r.mesh, scene, first, o.transfer.rays, stop, r.transfer, r.point_variance, r.vertex_rays, barrier, progress.add);
+    r.early_stop = early_stop_vertices(r.mesh, scene, first, o.transfer.rays, stop, r.transfer, r.point_variance, r.vertex_rays, barrier, progress.add,
+                                       &r.point_halves);
     r.rays += r.early_stop.rays;
   }
   r.seconds_transfer = clock.lap();
@@ -797,6 +799,9 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     refine_both_ways(mesh, scene, o, progress, r);
     r.seconds_refine = clock.lap();
   }
+  // New vertices have no halves, and the old ones need not keep their rows: unknown from here.
+  if (r.point_halves.rows() != Eigen::Index(r.mesh.num_vertices()) || o.refine != Refinement::None)
+    r.point_halves = RowMatrixXd::Constant(Eigen::Index(r.mesh.num_vertices()), r.transfer.cols(), NAN);
   if (o.transfer.log && o.fit.method == FitMethod::Point) o.transfer.log->barrier(true);
   if (o.refine_only) {  // --stage refine: the mesh and its point values, for later bakes
     r.point = r.transfer;

@@ -160,6 +160,10 @@ struct BakeResult {
   RowMatrixX3d albedo;   //!< #V by 3: the albedo at each vertex when it is coloured, else no rows
   size_t rekeyed_at = 0;  //!< faces when refinement turned to keys on bounced light (0: it did not)
   std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
+  //! #V by N²: each point value's two independent halves' difference t_A − t_B, carried through
+  //! its later rounds so that point_variance stays that of one lattice pair (NaN where unknown:
+  //! after refinement or simplification, which make new vertices)
+  RowMatrixXd point_halves;
   RefineStats refine;    //!< adaptive refinement's counts and times
   bool simplified = false;     //!< the budget was below the input's: simplified, not refined
   SimplifyStats simplify;      //!< simplification's counts and times

@@ -192,7 +192,7 @@ bool same_options(const ProgressiveOptions& a, const ProgressiveOptions& b) {
 // halves are: t = (t_A + t_B)/2 is not how the whole set encodes, but it is the whole set's
 // spread that matters, and the halves are each an estimate of half the rays.
 void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, const TransferOptions& opt, const PointRays& buf,
-                                double* row, double* variance) {
+                                double* row, double* variance, double* diff) {
   const int K = sh_count(opt.order);
   const uint32_t R = static_cast<uint32_t>(opt.rays);
   const bool blocked = opt.estimator == TransferEstimator::ProgressiveBlocked;
@@ -214,6 +214,7 @@ void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, con
   if (blocked && any_blocked == 0) {  // nothing to encode: the coefficients stay 0 exactly
     std::copy(unshadowed, unshadowed + K, row);
     if (variance) *variance = size[1] ? 0.0 : INFINITY;
+    if (diff) std::fill(diff, diff + K, size[1] ? 0.0 : NAN);
     return;
   }
   set.order_of_rays.resize(R);
@@ -239,12 +240,14 @@ void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, con
   if (!variance) return;
   if (size[1] == 0) {
     *variance = INFINITY;
+    if (diff) std::fill(diff, diff + K, NAN);
     return;
   }
   double d2 = 0;
   for (int c = 0; c < K; ++c) {
     const double d = set.encoders[1].coefficients()[size_t(c)] - set.encoders[2].coefficients()[size_t(c)];
     d2 += d * d;
+    if (diff) diff[c] = d;
   }
   *variance = d2 * size[0] * size[1] / (double(R) * R);
 }
@@ -254,14 +257,14 @@ void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, con
 // with per-ray variance σ² the result's is σ²/R = E‖t_A − t_B‖² · n_A n_B / R².
 void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals,
                     const RowMatrixX3d* offsets, Eigen::Index i, const TransferOptions& opt, const RaySequence& seq, PointRays& buf,
-                    double* row, double* variance) {
+                    double* row, double* variance, double* diff = nullptr) {
   const int K = sh_count(opt.order);
   double y[kMaxShOrder * kMaxShOrder];
   double acc[kMaxShOrder * kMaxShOrder], acc_a[kMaxShOrder * kMaxShOrder];
   const uint32_t R = static_cast<uint32_t>(opt.rays);
   trace_point(scene, points, normals, offsets, i, opt, seq, buf);
   if (opt.estimator == TransferEstimator::Progressive || opt.estimator == TransferEstimator::ProgressiveBlocked) {
-    progressive_point_transfer(normals, i, opt, buf, row, variance);
+    progressive_point_transfer(normals, i, opt, buf, row, variance, diff);
     return;
   }
   // Visible counts of the even (A) and odd (B) halves.
@@ -293,6 +296,7 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
   if (!variance) return;
   if (size[1] == 0) {
     *variance = INFINITY;  // one ray: nothing to compare it with
+    if (diff) std::fill(diff, diff + K, NAN);
     return;
   }
   double d2 = 0;
@@ -300,6 +304,7 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
     const double a = M_PI * acc_a[c] / size[0], b = M_PI * (acc[c] - acc_a[c]) / size[1];
     const double d = (beta[0] != beta[1] ? (beta[0] - beta[1]) * unshadowed[c] : 0.0) + a - b;
     d2 += d * d;
+    if (diff) diff[c] = d;
   }
   *variance = d2 * size[0] * size[1] / (double(R) * R);
 }
@@ -339,39 +344,48 @@ void finish_stats(const RayScene& scene, TransferStats* stats, const Stopwatch& 
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& opt,
                               TransferStats* stats, const ProgressFn& progress, const RowMatrixX3d* offsets,
-                              std::vector<double>* variance) {
+                              std::vector<double>* variance, RowMatrixXd* half_difference) {
   check_transfer_options(opt);
   const RaySequence seq = ray_sequence(opt);
   const Eigen::Index P = points.rows();
   if (opt.streams && opt.streams->size() != static_cast<size_t>(P)) throw InputError("transfer: one stream per point expected");
   const int K = sh_count(opt.order);
-  RowMatrixXd out(P, K);  // every row is written, except outside a shard's slice (zeroed there)
+  // With the halves' difference, each row holds the K values and then the K differences: one
+  // record for a sharded bake's log, whose fingerprint says which shape it has.
+  const int W = half_difference ? 2 * K : K;
+  RowMatrixXd out(P, W);  // every row is written, except outside a shard's slice (zeroed there)
   if (variance) variance->assign(static_cast<size_t>(P), 0.0);
   const Stopwatch clock;
+  auto finish = [&] {
+    if (half_difference) *half_difference = out.rightCols(K), out.conservativeResize(P, K);
+  };
   // A sharded bake: the call replayed, or only a slice of its points traced (the rest stay 0).
   Eigen::Index first = 0, last = P;
   TraceLog::Call call;
-  const uint64_t fingerprint = opt.log ? trace_fingerprint(points, normals, offsets, nullptr, opt) : 0;
+  const uint64_t fingerprint = opt.log ? trace_fingerprint(points, normals, offsets, nullptr, opt) ^ (half_difference ? 0x4A1FD1FFull : 0) : 0;
   if (opt.log) call = opt.log->begin(fingerprint, uint64_t(P));
   if (call.action == TraceLog::Action::Replay) {
-    replay_rows(*call.replay, P, K, out.data(), variance ? variance->data() : nullptr);
+    replay_rows(*call.replay, P, W, out.data(), variance ? variance->data() : nullptr);
     if (progress) progress(static_cast<size_t>(P));
     finish_stats(scene, stats, clock, P, opt.rays);
+    finish();
     return out;
   }
   if (call.action == TraceLog::Action::Slice) first = Eigen::Index(call.first), last = Eigen::Index(call.last), out.setZero();
   std::vector<double> own_variance;
   double* var = variance ? variance->data() : nullptr;
-  if (!var && call.action == TraceLog::Action::Slice) own_variance.assign(size_t(P), 0.0), var = own_variance.data();
+  if (!var && (call.action == TraceLog::Action::Slice || half_difference)) own_variance.assign(size_t(P), 0.0), var = own_variance.data();
   parallel_range(last - first, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
     thread_local PointRays buf;
     for (Eigen::Index i = first + range.begin(); i != first + range.end(); ++i)
-      point_transfer(scene, points, normals, offsets, i, opt, seq, buf, out.row(i).data(), var ? var + i : nullptr);
+      point_transfer(scene, points, normals, offsets, i, opt, seq, buf, out.row(i).data(), var ? var + i : nullptr,
+                     half_difference ? out.row(i).data() + K : nullptr);
     if (progress) progress(static_cast<size_t>(range.size()));
   });
   if (call.action == TraceLog::Action::Slice)
-    opt.log->record(slice_call(fingerprint, opt, P, K, out.data(), var, uint64_t(first), uint64_t(last)));
+    opt.log->record(slice_call(fingerprint, opt, P, W, out.data(), var, uint64_t(first), uint64_t(last)));
   finish_stats(scene, stats, clock, P, opt.rays);  // the whole call's rays, as one process would count them
+  finish();
   return out;
 }
 

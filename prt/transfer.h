@@ -79,12 +79,18 @@ struct TransferStats {
 //! \param variance if given, receives #P estimates of each result's variance, summed over its
 //!        N² values, from the disagreement of the estimator's two independent halves (infinite
 //!        with a single ray); an unoccluded point's is 0
+//! \param half_difference if given, receives #P by N²: each point's two independent halves'
+//!        estimates, t_A − t_B (NaN with a single ray). Later rounds of the same points continue
+//!        each half's own lattice, so differences merged by ray count as the values are stay those
+//!        of one lattice pair: with even counts, the merged estimate's variance is ‖t_A − t_B‖²/4,
+//!        where merging the rounds' variances as if independent overstates it (vertex_top_up.h).
 //! \return #P by N² row-major transfer
 //! \throw InputError for an order or ray count out of range, EmbreeError on Embree failure
 RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
                               const RowMatrixX3d& normals, const TransferOptions& options,
                               TransferStats* stats = nullptr, const ProgressFn& progress = {},
-                              const RowMatrixX3d* offsets = nullptr, std::vector<double>* variance = nullptr);
+                              const RowMatrixX3d* offsets = nullptr, std::vector<double>* variance = nullptr,
+                              RowMatrixXd* half_difference = nullptr);
 
 //! Called from worker threads with one group's transfer: `rows` rows of N² values, row-major,
 //! and each row's estimated variance (summed over its values; see shadowed_transfer).

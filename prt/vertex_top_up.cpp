@@ -165,10 +165,14 @@ double planned_variance(const TopUpPlan& plan, const std::vector<double>& varian
 }
 
 TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, const TopUpPlan& plan,
-                        RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays, const ProgressFn& progress) {
+                        RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays, const ProgressFn& progress,
+                        RowMatrixXd* halves, std::vector<double>* independent) {
   const size_t V = mesh.num_vertices();
   if (static_cast<size_t>(values.rows()) != V || variance.size() != V || plan.level.size() != V || rays.size() != V)
     throw InputError("top-up: values, variances and the plan need one row per vertex");
+  if (halves && (static_cast<size_t>(halves->rows()) != V || halves->cols() != values.cols()))
+    throw InputError("top-up: the halves' differences need one row per vertex and one column per value");
+  if (independent && independent->size() != V) throw InputError("top-up: one independent variance per vertex expected");
   const Stopwatch clock;
   TopUpStats stats;
   stats.histogram.assign(kMaxDoublings + 2, 0);
@@ -209,15 +213,26 @@ TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferO
     }
     TransferStats ts;
     std::vector<double> v2;
-    const RowMatrixXd x2 = shadowed_transfer(scene, p, nrm, o, &ts, progress, &off, &v2);
+    RowMatrixXd d2;
+    const RowMatrixXd x2 = shadowed_transfer(scene, p, nrm, o, &ts, progress, &off, &v2, halves ? &d2 : nullptr);
     if (x2.cols() != K) throw InputError("top-up: the order does not match the values");
     stats.rays += ts.rays;
     stats.vertices += members.size();
+    // Both counts even: each half holds half of each round's rays, so its merged estimate is
+    // the same weighting of its rounds as the values'.
+    const bool even = std::fmod(r1, 2.0) == 0 && std::fmod(r2, 2.0) == 0;
     for (Eigen::Index j = 0; j < n; ++j) {
       const size_t i = members[size_t(j)];
       const auto r = static_cast<Eigen::Index>(i);
       rays[i] = sum;
       values.row(r) = (r1 * values.row(r) + r2 * x2.row(j)) / sum;
+      if (independent) (*independent)[i] = (r1 * r1 * (*independent)[i] + r2 * r2 * v2[size_t(j)]) / (sum * sum);
+      if (halves && even && halves->row(r).allFinite() && d2.row(j).allFinite()) {
+        halves->row(r) = (r1 * halves->row(r) + r2 * d2.row(j)) / sum;
+        variance[i] = halves->row(r).squaredNorm() / 4;
+        continue;
+      }
+      if (halves) halves->row(r).setConstant(NAN);  // unknown from here on
       // As if the rounds were independent: an upper estimate when the lattice was continued.
       variance[i] = (r1 * r1 * variance[i] + r2 * r2 * v2[size_t(j)]) / (sum * sum);
     }
@@ -315,7 +330,7 @@ int early_stop_rounds(int first_rays, int max_rays) {
 
 EarlyStopStats early_stop_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& first, int max_rays, double stop_variance,
                                    RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
-                                   const std::function<void()>& between_rounds, const ProgressFn& progress) {
+                                   const std::function<void()>& between_rounds, const ProgressFn& progress, RowMatrixXd* halves) {
   const size_t V = mesh.num_vertices();
   if (variance.size() != V || rays.size() != V || static_cast<size_t>(values.rows()) != V)
     throw InputError("early stop: values, variances and ray counts need one row per vertex");
@@ -328,20 +343,24 @@ EarlyStopStats early_stop_vertices(const Mesh& mesh, const RayScene& scene, cons
   // At most as many rounds as doublings fit (a vertex can be doubled in a later round than its
   // neighbours, when their rays changed the variance around it, but never past max_rays).
   const int most_rounds = early_stop_rounds(first.rays, max_rays);
+  // What the rule reads: the rounds merged as if independent (see the header).
+  std::vector<double> own_decide;
+  if (halves) own_decide = variance;
+  std::vector<double>& decide = halves ? own_decide : variance;
   for (int k = 0; k < most_rounds; ++k) {
-    const std::vector<double> around = smoothed_variance(mesh, variance, rays);
+    const std::vector<double> around = smoothed_variance(mesh, decide, rays);
     TopUpPlan plan;
     plan.level.assign(V, -1);
     for (size_t i = 0; i < V; ++i) {
       // The faces around guard against a lucky estimate (one vertex's is a chi-square of few
       // degrees of freedom). Trusting a vertex still exact after a doubling was tried: on the
       // test's ground it lost to a fixed count (vertices missed the plate low on their horizon).
-      const double v = std::max(variance[i], around[i]), w = area[i] / std::max(mean_area, 1e-300);
+      const double v = std::max(decide[i], around[i]), w = area[i] / std::max(mean_area, 1e-300);
       if (2 * rays[i] <= max_rays && v * w > stop_variance * rays[i] / max_rays) plan.level[i] = 1, ++plan.vertices, plan.rays += uint64_t(rays[i]);
     }
     if (plan.vertices == 0) break;
     if (between_rounds) between_rounds();
-    stats.rays += apply_top_up(mesh, scene, first, plan, values, variance, rays, progress).rays;
+    stats.rays += apply_top_up(mesh, scene, first, plan, values, variance, rays, progress, halves, halves ? &own_decide : nullptr).rays;
     ++stats.rounds;
   }
   // A sharded bake counts its phases before it traces: every round that could have run ends one.

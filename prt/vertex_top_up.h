@@ -77,10 +77,17 @@ FirstRoundChoice choose_first_rays(const Mesh& mesh, const RayScene& scene, cons
 //! count so far, the weight of what it had). `options` are the first round's (seed, stream
 //! offset, and rays = its count): each vertex's lattice is continued from where it stopped. An
 //! odd first round cannot be doubled; then each round is an independent lattice of its own seed.
-//! The merged variance is computed as if the rounds were independent: an upper estimate.
+//! With `halves` (#V by K, each vertex's t_A − t_B from shadowed_transfer's half_difference, NaN
+//! where unknown), the halves' differences are merged as the values are and a vertex's merged
+//! variance is ‖t_A − t_B‖²/4: that of the one lattice pair its rounds make together (both
+//! counts even). Without them, or where a row is unknown, the variance is merged as if the
+//! rounds were independent: an upper estimate, 2.09 times the true squared error on the unit
+//! test's scene, since a continued lattice fills its first round's gaps.
 TopUpStats apply_top_up(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, const TopUpPlan& plan,
                         RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
-                        const ProgressFn& progress = {});
+                        const ProgressFn& progress = {}, RowMatrixXd* halves = nullptr,
+                        std::vector<double>* independent = nullptr);
+//! (`independent`, if given, #V: also merged as if the rounds were independent, whatever `halves` says.)
 
 struct EarlyStopStats {
   size_t rounds = 0;  //!< after the first
@@ -107,9 +114,14 @@ int early_stop_rounds(int first_rays, int max_rays);
 //! `between_rounds`, if set, runs once per round that could run (early_stop_rounds), before it
 //! or at the end (a sharded bake's barrier: its phases are counted before it traces). Does not
 //! depend on threads.
+//! `halves`, if given, as for apply_top_up: the variances left in `variance` are then the merged
+//! lattices' own. The rule still reads the rounds merged as if independent, an upper estimate:
+//! read with the lattices' own, a vertex whose halves agreed by chance stops on its luck (tried:
+//! on the unit test's scene early stop then lost to a fixed count at the same rays).
 EarlyStopStats early_stop_vertices(const Mesh& mesh, const RayScene& scene, const TransferOptions& first, int max_rays, double stop_variance,
                                    RowMatrixXd& values, std::vector<double>& variance, std::vector<double>& rays,
-                                   const std::function<void()>& between_rounds = {}, const ProgressFn& progress = {});
+                                   const std::function<void()>& between_rounds = {}, const ProgressFn& progress = {},
+                                   RowMatrixXd* halves = nullptr);
 
 //! Traces up to `budget` more rays from the render vertices of `mesh` and merges them into
 //! `values` (#V by K) and `variance` (#V, as shadowed_transfer estimates it), each vertex
