@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <functional>
 #include <sstream>
 
 #include "prtsub/prt/sampling.h"
@@ -154,8 +155,8 @@ Eigen::Vector3d latlong_direction(double u, double v) {
   return {std::sin(theta) * std::cos(phi), std::cos(theta), -std::sin(theta) * std::sin(phi)};
 }
 
-ShLight environment_light(int order, const Image& img) {
-  ShLight light = empty_light(order);
+Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> integrate_latlong(const Image& img, int count,
+                                                                           const std::function<void(const Eigen::Vector3d&, double*)>& eval) {
   if (img.width <= 0 || img.height <= 0 || img.channels <= 0) throw InputError("environment map: empty image");
   if (img.channels == 2) throw InputError("environment map: 2-channel images are not supported (use grey or RGB)");
   // Inside a texel: 4 Gauss-Legendre points in cos θ (exact for the polar polynomials of the
@@ -163,8 +164,9 @@ ShLight environment_light(int order, const Image& img) {
   // exact solid angle (2π/W)(cos θ0 − cos θ1).
   static const double gx[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
   static const double gw[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
-  const int K = sh_count(order), sub = 4;
-  std::vector<double> y(static_cast<size_t>(K)), integral(static_cast<size_t>(K));
+  const int sub = 4;
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> out = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>::Zero(count, 3);
+  std::vector<double> y(static_cast<size_t>(count)), integral(static_cast<size_t>(count));
   for (int r = 0; r < img.height; ++r) {
     const double z0 = std::cos(M_PI * r / img.height), z1 = std::cos(M_PI * (r + 1) / img.height);
     const double zmid = 0.5 * (z0 + z1), zhalf = 0.5 * (z0 - z1);
@@ -175,15 +177,21 @@ ShLight environment_light(int order, const Image& img) {
           const double phi = 2 * M_PI * (col + (a + 0.5) / sub) / img.width;
           const double ct = zmid + zhalf * gx[b], st = std::sqrt(std::max(0.0, 1 - ct * ct));
           const double w = (2 * M_PI / img.width / sub) * zhalf * gw[b];
-          sh_eval(order, st * std::cos(phi), ct, -st * std::sin(phi), y.data());
-          for (int i = 0; i < K; ++i) integral[static_cast<size_t>(i)] += w * y[static_cast<size_t>(i)];
+          eval(Eigen::Vector3d(st * std::cos(phi), ct, -st * std::sin(phi)), y.data());
+          for (int i = 0; i < count; ++i) integral[static_cast<size_t>(i)] += w * y[static_cast<size_t>(i)];
         }
       Eigen::Vector3d rgb;
       for (int c = 0; c < 3; ++c) rgb[c] = img.at(col, r, img.channels >= 3 ? c : 0);
       if (!rgb.allFinite()) throw InputError("environment map: texel (" + std::to_string(col) + ", " + std::to_string(r) + ") is not finite");
-      for (int i = 0; i < K; ++i) light.coeffs.row(i) += integral[static_cast<size_t>(i)] * rgb.transpose();
+      for (int i = 0; i < count; ++i) out.row(i) += integral[static_cast<size_t>(i)] * rgb.transpose();
     }
   }
+  return out;
+}
+
+ShLight environment_light(int order, const Image& img) {
+  ShLight light = empty_light(order);
+  light.coeffs = integrate_latlong(img, sh_count(order), [order](const Eigen::Vector3d& d, double* y) { sh_eval(order, d.x(), d.y(), d.z(), y); });
   return light;
 }
 

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,12 @@ ShLight coefficients_light(int order, const std::vector<double>& coefficients);
 //! θ = π v from +y and φ = 2π u, direction (sin θ cos φ, cos θ, −sin θ sin φ).
 //! \throw InputError for an empty image or one with fewer than 3 channels (1 is grey)
 ShLight environment_light(int order, const Image& latlong);
+
+//! ∫ L(ω) f_i(ω) dω, i < count, for a lat-long radiance map, with environment_light's texel-exact
+//! quadrature; `eval(direction, out)` writes the count values f_i(direction). #count by 3 (RGB).
+//! \throw InputError as environment_light does
+Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> integrate_latlong(const Image& latlong, int count,
+                                                                           const std::function<void(const Eigen::Vector3d&, double*)>& eval);
 
 //! Direction of lat-long coordinates (u, v) in [0,1]² (see environment_light).
 Eigen::Vector3d latlong_direction(double u, double v);

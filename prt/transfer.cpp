@@ -43,6 +43,7 @@
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/progressive_encoder.h"
 #include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sg_basis.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/trace_log.h"
 #include "prtsub/subdiv/exceptions.h"
@@ -386,6 +387,52 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
     opt.log->record(slice_call(fingerprint, opt, P, W, out.data(), var, uint64_t(first), uint64_t(last)));
   finish_stats(scene, stats, clock, P, opt.rays);  // the whole call's rays, as one process would count them
   finish();
+  return out;
+}
+
+RowMatrixXd sg_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals, const SgBasis& basis,
+                        const TransferOptions& options, const RowMatrixX3d* offsets) {
+  TransferOptions opt = options;
+  opt.estimator = TransferEstimator::Progressive;  // the same directions as pls: the hemisphere's lattice
+  opt.progressive.non_negative = false;            // checked here, not refused as for SH
+  check_transfer_options(opt);
+  if (opt.first_ray != 0 || opt.log) throw InputError("spherical-Gaussian transfer: a single round, not sharded");
+  if (basis.size() < 1 || !(basis.sharpness > 0)) throw InputError("spherical-Gaussian transfer: an empty lobe set");
+  const RaySequence seq = ray_sequence(opt);
+  const Eigen::Index P = points.rows();
+  const int N = basis.size();
+  const Eigen::MatrixXd gram = sg_gram(basis);
+  std::vector<double> mean_square(static_cast<size_t>(N), 0.0), start(static_cast<size_t>(N), 1.0);  // unit peaks: the paper's start of 1
+  for (int k = 0; k < N; ++k) mean_square[size_t(k)] = gram(k, k) / (4 * M_PI);
+  RowMatrixXd out(P, N);
+  parallel_range(P, opt.threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& range) {
+    thread_local PointRays buf;
+    thread_local std::vector<uint32_t> order;
+    thread_local std::vector<double> g;
+    ProgressiveEncoder encoder(N, 1, options.progressive, mean_square, start);
+    g.resize(size_t(N));
+    for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
+      trace_point(scene, points, normals, offsets, i, opt, seq, buf);
+      const Eigen::Vector3d n = normals.row(i).transpose();
+      const uint32_t R = uint32_t(opt.rays);
+      order.resize(R);
+      for (uint32_t k = 0; k < R; ++k) order[k] = k;
+      Rng shuffle(opt.seed ^ 0xA24BAED4963EE407ull, point_stream(opt, i));
+      for (uint32_t k = R; k > 1; --k) std::swap(order[k - 1], order[uint32_t(shuffle.next() % k)]);
+      encoder.reset();
+      const double zero = 0.0;
+      for (uint32_t k : order) {
+        const Eigen::Vector3d& d = buf.directions[k];
+        const double value = occluded(buf.rays[k]) ? 0.0 : std::max(0.0, d.dot(n));
+        sg_eval(basis, d, g.data());
+        encoder.add(g.data(), &value);
+        sg_eval(basis, d - 2.0 * d.dot(n) * n, g.data());  // its mirror below the horizon: 0, no ray
+        encoder.add(g.data(), &zero);
+      }
+      for (int k = 0; k < N; ++k) out(i, k) = encoder.coefficients()[size_t(k)];
+    }
+  });
+  scene.check("tracing transfer rays");
   return out;
 }
 

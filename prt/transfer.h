@@ -106,6 +106,19 @@ void shadowed_transfer_groups(const RayScene& scene, const RowMatrixX3d& points,
                               const GroupFn& consume, TransferStats* stats = nullptr, const ProgressFn& progress = {},
                               const RowMatrixX3d* offsets = nullptr);
 
+struct SgBasis;
+
+//! Transfer in spherical-Gaussian lobes (sg_basis.h): T(ω) = V(ω) max(n·ω, 0) ≈ Σ_k c_k G_k(ω) at
+//! each point, the c_k fitted to `options.rays` rays by the progressive least-squares encoder
+//! (`options.progressive`; non_negative keeps every c_k ≥ 0, so no light can come out negative),
+//! with pls's directions: the hemisphere's lattice, each ray's mirror below the horizon a free
+//! zero. Relit by radiance = albedo/π · Σ_k c_k L_k (sg_light). A single round, not sharded; the
+//! same for any thread count.
+//! \return #P by N
+//! \throw InputError as shadowed_transfer does, or for an empty lobe set
+RowMatrixXd sg_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals, const SgBasis& basis,
+                        const TransferOptions& options, const RowMatrixX3d* offsets = nullptr);
+
 //! The baseline for benchmarks: the same rays from the same points with the same thread
 //! count, with nothing done but counting occluded rays.
 //! \return the number of occluded rays

@@ -19,6 +19,8 @@
 #include "prtsub/prt/asset.h"
 #include "prtsub/prt/bake.h"
 #include "prtsub/prt/gltf.h"
+#include "prtsub/prt/sg_basis.h"
+#include "prtsub/prt/transfer.h"
 #include "prtsub/prt/image_io.h"
 #include "prtsub/prt/lights.h"
 #include "prtsub/prt/ray_scene.h"
@@ -364,6 +366,25 @@ PYBIND11_MODULE(prtsub, m) {
         const ShLight s = l.at(order);
         return py::array_t<double>({static_cast<py::ssize_t>(s.coeffs.rows()), py::ssize_t(3)}, s.coeffs.data());
       }, py::arg("order"), "The light's SH coefficients at `order`: (order², 3), RGB.");
+
+  m.def("sg_transfer", [](const Mesh& mesh, int lobes, int rays, uint64_t seed, bool non_negative, int threads) {
+        const SgBasis basis = sg_basis(lobes);
+        const RayScene scene(mesh.positions, position_triangles(mesh));
+        TransferOptions o;
+        o.rays = rays, o.seed = seed, o.threads = threads, o.progressive.non_negative = non_negative;
+        const RowMatrixX3d offsets = vertex_offset_directions(mesh);
+        const RowMatrixXd c = sg_transfer(scene, vertex_positions(mesh), mesh.normals, basis, o, &offsets);
+        return py::array_t<double>({static_cast<py::ssize_t>(c.rows()), static_cast<py::ssize_t>(c.cols())}, c.data());
+      }, py::arg("mesh"), py::arg("lobes"), py::kw_only(), py::arg("rays") = 256, py::arg("seed") = 0, py::arg("non_negative") = true,
+      py::arg("threads") = 0,
+      "Transfer at the mesh's render vertices in `lobes` spherical Gaussians (docs/transfer.md): (#V, lobes), fitted to `rays` rays "
+      "per vertex by the progressive least-squares encoder, non-negative unless told otherwise.");
+  m.def("sg_light", [](const PyLight& l, int lobes, int order) {
+        const auto L = sg_light(sg_basis(lobes), l.at(order));
+        return py::array_t<double>({static_cast<py::ssize_t>(L.rows()), py::ssize_t(3)}, L.data());
+      }, py::arg("light"), py::arg("lobes"), py::arg("order") = 10,
+      "What each of the `lobes` spherical Gaussians sees of the light (projected into SH at `order` first): (lobes, 3), RGB. "
+      "A vertex with coefficients c shades as albedo/pi * c @ sg_light(...).");
 
   m.def("sky", [](const std::vector<double>& up) {
         const Eigen::Vector3d u = vec3(up, "up");

@@ -1,5 +1,7 @@
 #include "helpers.h"
 
+#include <Eigen/Dense>
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -292,6 +294,35 @@ Eigen::Matrix3d random_rotation(uint64_t seed) {
   Rng rng(seed, 11);
   Eigen::Quaterniond q(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
   return q.normalized().toRotationMatrix();
+}
+
+}  // namespace prtsub::test
+
+namespace prtsub::test {
+
+Eigen::VectorXd nnls_by_enumeration(const Eigen::MatrixXd& G, const Eigen::VectorXd& m) {
+  const int N = int(m.size());
+  Eigen::VectorXd best = Eigen::VectorXd::Zero(N);
+  double best_value = 0;
+  for (int mask = 1; mask < (1 << N); ++mask) {
+    std::vector<int> idx;
+    for (int i = 0; i < N; ++i)
+      if (mask >> i & 1) idx.push_back(i);
+    const auto n = Eigen::Index(idx.size());
+    Eigen::MatrixXd g(n, n);
+    Eigen::VectorXd r(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      r[i] = m[idx[size_t(i)]];
+      for (Eigen::Index j = 0; j < n; ++j) g(i, j) = G(idx[size_t(i)], idx[size_t(j)]);
+    }
+    const Eigen::VectorXd x = g.ldlt().solve(r);
+    if (x.minCoeff() < 0) continue;
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(N);
+    for (Eigen::Index i = 0; i < n; ++i) c[idx[size_t(i)]] = x[i];
+    const double value = c.dot(G * c) - 2 * c.dot(m);
+    if (value < best_value) best_value = value, best = c;
+  }
+  return best;
 }
 
 }  // namespace prtsub::test

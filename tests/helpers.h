@@ -71,4 +71,8 @@ void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weig
 Eigen::Matrix3d random_rotation(uint64_t seed);
 //! A uniformly random unit vector.
 Eigen::Vector3d random_direction(uint64_t seed);
+//! argmin over c ≥ 0 of cᵀGc − 2cᵀm (G symmetric positive definite, at most ~16 unknowns), by
+//! solving on every support and keeping the best non-negative solution: an independent check of
+//! non-negative encoders.
+Eigen::VectorXd nnls_by_enumeration(const Eigen::MatrixXd& G, const Eigen::VectorXd& m);
 }  // namespace prtsub::test

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "helpers.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/random.h"
@@ -64,28 +65,7 @@ Eigen::Vector4d exact_fit(const Lobes& L, bool non_negative, Target target = smo
     }
   }
   if (!non_negative) return G.ldlt().solve(m);
-  // Non-negative least squares by enumeration: the best of every support's unconstrained fit
-  // that is non-negative (the objective is bᵀGb − 2bᵀm up to a constant).
-  Eigen::Vector4d best = Eigen::Vector4d::Zero();
-  double best_value = 0;
-  for (int mask = 1; mask < 16; ++mask) {
-    std::vector<int> idx;
-    for (int i = 0; i < 4; ++i)
-      if (mask >> i & 1) idx.push_back(i);
-    Eigen::MatrixXd g(idx.size(), idx.size());
-    Eigen::VectorXd r(idx.size());
-    for (size_t i = 0; i < idx.size(); ++i) {
-      r[Eigen::Index(i)] = m[idx[i]];
-      for (size_t j = 0; j < idx.size(); ++j) g(Eigen::Index(i), Eigen::Index(j)) = G(idx[i], idx[j]);
-    }
-    const Eigen::VectorXd x = g.ldlt().solve(r);
-    if (x.minCoeff() < 0) continue;
-    Eigen::Vector4d b = Eigen::Vector4d::Zero();
-    for (size_t i = 0; i < idx.size(); ++i) b[idx[i]] = x[Eigen::Index(i)];
-    const double value = b.dot(G * b) - 2 * b.dot(m);
-    if (value < best_value) best_value = value, best = b;
-  }
-  return best;
+  return test::nnls_by_enumeration(G, m);
 }
 
 Eigen::Vector4d encode(const Lobes& L, const ProgressiveOptions& o, int samples, uint64_t seed, bool check_non_negative = false,

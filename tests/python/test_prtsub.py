@@ -232,5 +232,24 @@ class BakeTest(unittest.TestCase):
         self.assertFalse(os.path.exists(self.path("x.ply")))
 
 
+
+class SphericalGaussianTest(unittest.TestCase):
+    def test_lobes_are_fitted_non_negative_and_lights_project_in_closed_form(self):
+        v, f = box_on_ground()
+        mesh = prtsub.mesh(v, f)
+        c = prtsub.sg_transfer(mesh, 12, rays=128)
+        self.assertEqual(c.shape, (mesh.num_vertices, 12))
+        self.assertGreaterEqual(c.min(), 0.0)
+        signed = prtsub.sg_transfer(mesh, 12, rays=128, non_negative=False)
+        self.assertLess(signed.min(), 0.0)  # the clamp binds: a signed fit carves out the lower half
+        # A constant light: each lobe sees 4π e^{-λ} sinh(λ)/λ of it, λ = ln 2 / (1 - cos(θ/2)), θ = √(4π/12).
+        lam = math.log(2) / (1 - math.cos(math.sqrt(4 * math.pi / 12) / 2))
+        lobe = 4 * math.pi * math.exp(-lam) * math.sinh(lam) / lam
+        light = prtsub.sg_light(prtsub.constant([0.5, 1, 2]), 12)
+        self.assertEqual(light.shape, (12, 3))
+        np.testing.assert_allclose(light, np.tile([0.5 * lobe, lobe, 2 * lobe], (12, 1)), rtol=1e-9)
+        with self.assertRaisesRegex(ValueError, "between 4 and 64 lobes"):
+            prtsub.sg_transfer(mesh, 3)
+
 if __name__ == "__main__":
     unittest.main()

@@ -1,0 +1,48 @@
+// Spherical-Gaussian lobes: a fixed, non-negative basis for transfer, and lights projected onto it.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "prtsub/prt/lights.h"
+
+namespace prtsub {
+
+//! N lobes G_k(ω) = exp(λ (μ_k·ω − 1)), peak 1 at their axis μ_k, all of one sharpness λ.
+//! The set is fixed by N alone (docs/transfer.md, "Spherical-Gaussian lobes"): axes on the
+//! spherical Fibonacci lattice, μ_k = (√(1−z²) cos φ_k, √(1−z²) sin φ_k, z), z = 1 − (2k+1)/N,
+//! φ_k = k·π(3 − √5); λ = ln 2 / (1 − cos(θ/2)) with θ = √(4π/N) the mean spacing of the axes, so
+//! that a lobe falls to half its peak halfway to its neighbours (λ ≈ 4.089 for 9 lobes, 5.412 for 12).
+struct SgBasis {
+  std::vector<Eigen::Vector3d> axes;
+  double sharpness = 0;
+  int size() const { return static_cast<int>(axes.size()); }
+};
+
+constexpr int kMinSgLobes = 4, kMaxSgLobes = 64;
+
+//! \throw InputError unless kMinSgLobes ≤ lobes ≤ kMaxSgLobes
+SgBasis sg_basis(int lobes);
+
+//! Every lobe's value at unit direction w (out: size() values).
+void sg_eval(const SgBasis& basis, const Eigen::Vector3d& w, double* out);
+
+//! ∫ G_i G_j dω in closed form: 4π e^{−2λ} sinh(r)/r, r = λ‖μ_i + μ_j‖ (4π e^{−2λ} when r = 0).
+Eigen::MatrixXd sg_gram(const SgBasis& basis);
+
+//! g_l = ∫ P_l(μ·ω) e^{λ(μ·ω − 1)} dω = 4π e^{−λ} i_l(λ) (i_l the modified spherical Bessel function
+//! of the first kind), l = 0 .. order−1: by Funk–Hecke, ∫ y_lm(ω) G(ω) dω = g_l y_lm(μ).
+//! \throw InputError unless λ > 0 and finite, 1 ≤ order ≤ 64
+std::vector<double> sg_zonal(double sharpness, int order);
+
+//! What each lobe sees of a light: L_k = ∫ L(ω) G_k(ω) dω per channel, #N by 3. For an SH light
+//! in closed form, L_k = Σ_lm g_l y_lm(μ_k) l_lm, exact at the light's order. A transfer
+//! T(ω) = Σ_k c_k G_k(ω) then shades as radiance = albedo/π · Σ_k c_k L_k.
+Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> sg_light(const SgBasis& basis, const ShLight& light);
+
+//! The same for a lat-long radiance map (the layout of environment_light), integrated texel by
+//! texel with the same exact solid angles.
+//! \throw InputError as environment_light does
+Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> sg_light(const SgBasis& basis, const Image& latlong);
+
+}  // namespace prtsub
