@@ -25,7 +25,7 @@ struct ErrorView {
 
 //! The grid, n the largest of 1..8 with F·n² ≤ target_triangles (at least 1), and the reference
 //! traced at it on `source` (the mesh the asset was baked from) with `options` (its order is the
-//! asset's). 	hrow EmbreeError
+//! asset's). \throw EmbreeError
 ErrorView trace_error_view(const Asset& asset, const RayScene& source, TransferOptions options, size_t target_triangles = 20000);
 
 struct ViewerPageOptions {

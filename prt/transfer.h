@@ -32,7 +32,7 @@ enum class TransferEstimator {
 
 //! "cv", "mc", "pls", "pls-cv".
 const char* estimator_name(TransferEstimator e);
-//! 	hrow InputError naming the accepted names
+//! \throw InputError naming the accepted names
 TransferEstimator estimator_from_name(const std::string& name);
 
 struct TransferOptions {
