@@ -88,6 +88,20 @@ Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> sg_light(const SgBasis
   return out;
 }
 
+RowMatrixXd sg_to_sh(const SgBasis& basis, const RowMatrixXd& coefficients, int order) {
+  if (coefficients.cols() != basis.size()) throw InputError("spherical Gaussians: one coefficient per lobe expected");
+  if (order < 1 || order > kMaxShOrder) throw InputError("SH order must be between 1 and " + std::to_string(kMaxShOrder));
+  const int N = basis.size(), K = sh_count(order);
+  const std::vector<double> g = sg_zonal(basis.sharpness, order);
+  RowMatrixXd M(N, K);  // row k: lobe k's SH projection, g_l y_lm(μ_k)
+  for (int k = 0; k < N; ++k) {
+    const Eigen::Vector3d& a = basis.axes[size_t(k)];
+    sh_eval(order, a.x(), a.y(), a.z(), M.row(k).data());
+    for (int l = 0; l < order; ++l) M.row(k).segment(l * l, 2 * l + 1) *= g[size_t(l)];
+  }
+  return coefficients * M;
+}
+
 Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> sg_light(const SgBasis& basis, const Image& img) {
   return integrate_latlong(img, basis.size(), [&basis](const Eigen::Vector3d& d, double* g) { sg_eval(basis, d, g); });
 }

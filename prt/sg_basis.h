@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "prtsub/prt/lights.h"
+#include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
 
@@ -39,6 +40,12 @@ std::vector<double> sg_zonal(double sharpness, int order);
 //! in closed form, L_k = Σ_lm g_l y_lm(μ_k) l_lm, exact at the light's order. A transfer
 //! T(ω) = Σ_k c_k G_k(ω) then shades as radiance = albedo/π · Σ_k c_k L_k.
 Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> sg_light(const SgBasis& basis, const ShLight& light);
+
+//! Lobe coefficients (#P by N, one row per point) as SH transfer of `order` (#P by order²): by
+//! Funk–Hecke, Σ_k c_k G_k projects onto y_lm as Σ_k c_k g_l y_lm(μ_k). Exact for every light of
+//! that order (Σ_i l_i t_i = Σ_k c_k L_k), so eval's metric judges lobes as it judges SH.
+//! \throw InputError unless coefficients has N columns and 1 ≤ order ≤ kMaxShOrder
+RowMatrixXd sg_to_sh(const SgBasis& basis, const RowMatrixXd& coefficients, int order);
 
 //! The same for a lat-long radiance map (the layout of environment_light), integrated texel by
 //! texel with the same exact solid angles.

@@ -379,6 +379,13 @@ PYBIND11_MODULE(prtsub, m) {
       py::arg("threads") = 0,
       "Transfer at the mesh's render vertices in `lobes` spherical Gaussians (docs/transfer.md): (#V, lobes), fitted to `rays` rays "
       "per vertex by the progressive least-squares encoder, non-negative unless told otherwise.");
+  m.def("sg_to_sh", [](py::array_t<double, py::array::c_style | py::array::forcecast> c, int order) {
+        if (c.ndim() != 2) throw InputError("sg_to_sh: coefficients must be an array of shape (P, lobes)");
+        const RowMatrixXd in = Eigen::Map<const RowMatrixXd>(c.data(), c.shape(0), c.shape(1));
+        const RowMatrixXd t = sg_to_sh(sg_basis(static_cast<int>(c.shape(1))), in, order);
+        return py::array_t<double>({static_cast<py::ssize_t>(t.rows()), static_cast<py::ssize_t>(t.cols())}, t.data());
+      }, py::arg("coefficients"), py::arg("order"),
+      "Lobe coefficients (P, lobes) as SH transfer (P, order²), exact for every light of that order (Funk-Hecke).");
   m.def("sg_light", [](const PyLight& l, int lobes, int order) {
         const auto L = sg_light(sg_basis(lobes), l.at(order));
         return py::array_t<double>({static_cast<py::ssize_t>(L.rows()), py::ssize_t(3)}, L.data());

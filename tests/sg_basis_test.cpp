@@ -211,3 +211,34 @@ TEST(SgTransfer, AnEnclosedPointIsExactlyZeroAndBadOptionsAreRefused) {
 
 }  // namespace
 }  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+TEST(SgBasis, LobesConvertToShThatRelightsThemExactlyAtItsOrder) {
+  // For any coefficients and any light of the order, Σ_i l_i t_i of the converted transfer equals
+  // Σ_k c_k L_k; and each converted row is the lobes' sum projected by quadrature.
+  const SgBasis b = sg_basis(12);
+  RowMatrixXd c(3, 12);
+  for (Eigen::Index i = 0; i < c.size(); ++i) c.data()[i] = std::sin(0.7 * double(i) + 1);
+  const RowMatrixXd t = sg_to_sh(b, c, 5);
+  ASSERT_EQ(t.cols(), 25);
+  for (uint64_t seed : {1, 2}) {
+    const ShLight light = random_light(5, seed);
+    const Eigen::VectorXd via_sh = t * light.coeffs.col(0), via_lobes = c * sg_light(b, light).col(0);
+    EXPECT_LT((via_sh - via_lobes).cwiseAbs().maxCoeff(), 1e-12 * (1 + via_lobes.cwiseAbs().maxCoeff()));
+  }
+  for (int i : {0, 7, 24}) {
+    const double q = sphere_integral([&](const Eigen::Vector3d& v) {
+      double s[64];
+      sg_eval(b, v, s);
+      return Eigen::Map<const Eigen::VectorXd>(s, 12).dot(c.row(1).transpose()) * sh_eval(5, v)[i];
+    });
+    EXPECT_NEAR(t(1, i), q, 1e-9 * (1 + std::abs(q))) << i;
+  }
+  EXPECT_THROW(sg_to_sh(b, RowMatrixXd(2, 9), 4), InputError);
+  EXPECT_THROW(sg_to_sh(b, c, 0), InputError);
+}
+
+}  // namespace
+}  // namespace prtsub

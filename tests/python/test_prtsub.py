@@ -248,6 +248,11 @@ class SphericalGaussianTest(unittest.TestCase):
         light = prtsub.sg_light(prtsub.constant([0.5, 1, 2]), 12)
         self.assertEqual(light.shape, (12, 3))
         np.testing.assert_allclose(light, np.tile([0.5 * lobe, lobe, 2 * lobe], (12, 1)), rtol=1e-9)
+        # As SH of order 4, the lobes relight exactly as they do under any order-4 light.
+        sh = prtsub.sg_to_sh(c, 4)
+        self.assertEqual(sh.shape, (mesh.num_vertices, 16))
+        light = prtsub.random_light(3)
+        np.testing.assert_allclose(sh @ light.coefficients(4)[:, 0], c @ prtsub.sg_light(light, 12, order=4)[:, 0], rtol=1e-9, atol=1e-12)
         with self.assertRaisesRegex(ValueError, "between 4 and 64 lobes"):
             prtsub.sg_transfer(mesh, 3)
 
