@@ -173,6 +173,31 @@ void check_transfer_options(const TransferOptions& o) {
 
 namespace {
 
+// The order in which point i's rays are fed to an encoder: a seeded shuffle (a lattice fed in its
+// own order would sweep the sphere and bias a 1/k-step iteration).
+void shuffled_rays(const TransferOptions& opt, Eigen::Index i, std::vector<uint32_t>& order) {
+  const uint32_t R = static_cast<uint32_t>(opt.rays);
+  order.resize(R);
+  for (uint32_t k = 0; k < R; ++k) order[k] = k;
+  Rng shuffle(opt.seed ^ 0xA24BAED4963EE407ull, point_stream(opt, i) + (uint64_t(opt.first_ray) << 40));
+  for (uint32_t k = R; k > 1; --k) std::swap(order[k - 1], order[uint32_t(shuffle.next() % k)]);
+}
+
+// A point's variance from its halves' difference d = t_A − t_B (K values; null with a single ray,
+// which has nothing to compare with): ‖d‖² n_A n_B / R², and d itself into diff when wanted.
+void halves_variance(const double* d, int K, const uint32_t size[2], double* variance, double* diff) {
+  if (!d) {
+    *variance = INFINITY;
+    if (diff) std::fill(diff, diff + K, NAN);
+    return;
+  }
+  double d2 = 0;
+  for (int c = 0; c < K; ++c) d2 += d[c] * d[c];
+  if (diff) std::copy(d, d + K, diff);
+  const double R = double(size[0]) + double(size[1]);
+  *variance = d2 * size[0] * size[1] / (R * R);
+}
+
 // The encoder per thread, rebuilt when the order or the options change.
 struct EncoderSet {
   int order = 0;
@@ -218,10 +243,7 @@ void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, con
     if (diff) std::fill(diff, diff + K, size[1] ? 0.0 : NAN);
     return;
   }
-  set.order_of_rays.resize(R);
-  for (uint32_t k = 0; k < R; ++k) set.order_of_rays[k] = k;
-  Rng shuffle(opt.seed ^ 0xA24BAED4963EE407ull, point_stream(opt, i) + (uint64_t(opt.first_ray) << 40));
-  for (uint32_t k = R; k > 1; --k) std::swap(set.order_of_rays[k - 1], set.order_of_rays[uint32_t(shuffle.next() % k)]);
+  shuffled_rays(opt, i, set.order_of_rays);
   double y[kMaxShOrder * kMaxShOrder];
   const double zero = 0.0;
   for (uint32_t k : set.order_of_rays) {
@@ -239,18 +261,9 @@ void progressive_point_transfer(const RowMatrixX3d& normals, Eigen::Index i, con
   const std::vector<double>& b = set.encoders[0].coefficients();
   for (int c = 0; c < K; ++c) row[c] = blocked ? unshadowed[c] - b[size_t(c)] : b[size_t(c)];
   if (!variance) return;
-  if (size[1] == 0) {
-    *variance = INFINITY;
-    if (diff) std::fill(diff, diff + K, NAN);
-    return;
-  }
-  double d2 = 0;
-  for (int c = 0; c < K; ++c) {
-    const double d = set.encoders[1].coefficients()[size_t(c)] - set.encoders[2].coefficients()[size_t(c)];
-    d2 += d * d;
-    if (diff) diff[c] = d;
-  }
-  *variance = d2 * size[0] * size[1] / (double(R) * R);
+  double d[kMaxShOrder * kMaxShOrder];
+  for (int c = 0; c < K; ++c) d[c] = set.encoders[1].coefficients()[size_t(c)] - set.encoders[2].coefficients()[size_t(c)];
+  halves_variance(size[1] ? d : nullptr, K, size, variance, diff);
 }
 
 // One point's transfer into row (K values), and optionally its estimated variance (summed over
@@ -295,19 +308,12 @@ void point_transfer(const RayScene& scene, const RowMatrixX3d& points, const Row
   if (beta_mean != 0.0 || (variance && beta[0] != beta[1])) unshadowed_transfer(opt.order, normals.row(i).transpose(), unshadowed);
   for (int c = 0; c < K; ++c) row[c] = (beta_mean != 0.0 ? beta_mean * unshadowed[c] : 0.0) + scale * acc[c];
   if (!variance) return;
-  if (size[1] == 0) {
-    *variance = INFINITY;  // one ray: nothing to compare it with
-    if (diff) std::fill(diff, diff + K, NAN);
-    return;
-  }
-  double d2 = 0;
-  for (int c = 0; c < K; ++c) {
+  double d[kMaxShOrder * kMaxShOrder];
+  for (int c = 0; c < K && size[1]; ++c) {
     const double a = M_PI * acc_a[c] / size[0], b = M_PI * (acc[c] - acc_a[c]) / size[1];
-    const double d = (beta[0] != beta[1] ? (beta[0] - beta[1]) * unshadowed[c] : 0.0) + a - b;
-    d2 += d * d;
-    if (diff) diff[c] = d;
+    d[c] = (beta[0] != beta[1] ? (beta[0] - beta[1]) * unshadowed[c] : 0.0) + a - b;
   }
-  *variance = d2 * size[0] * size[1] / (double(R) * R);
+  halves_variance(size[1] ? d : nullptr, K, size, variance, diff);
 }
 
 // A replayed call's rows (every point's, gathered over the shards) into a call's outputs.
@@ -414,11 +420,7 @@ RowMatrixXd sg_transfer(const RayScene& scene, const RowMatrixX3d& points, const
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
       trace_point(scene, points, normals, offsets, i, opt, seq, buf);
       const Eigen::Vector3d n = normals.row(i).transpose();
-      const uint32_t R = uint32_t(opt.rays);
-      order.resize(R);
-      for (uint32_t k = 0; k < R; ++k) order[k] = k;
-      Rng shuffle(opt.seed ^ 0xA24BAED4963EE407ull, point_stream(opt, i));
-      for (uint32_t k = R; k > 1; --k) std::swap(order[k - 1], order[uint32_t(shuffle.next() % k)]);
+      shuffled_rays(opt, i, order);
       encoder.reset();
       const double zero = 0.0;
       for (uint32_t k : order) {
