@@ -229,6 +229,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     for (size_t k = 0; k < res.bounce.change_percent.size(); ++k)
       r.set("bounce_change_percent_" + std::to_string(k + 1), res.bounce.change_percent[k]);
     r.set("bounce_rays", res.bounce.rays);
+    r.set("bounce_rays_per_vertex", res.bounce_rays);
     r.set("bounce_cached", res.bounce.cached);
     r.set("bounce_cache_mib", res.bounce.cache_mib);
     r.set("seconds_bounce", res.seconds_bounce);
@@ -265,6 +266,12 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("target_sample_rays", res.target_sample_rays);
     r.set("target_sample_rounds", res.target_sample_rounds);
     r.set("seconds_target", res.seconds_target);
+    if (res.predicted_direct.samples > 0) {
+      r.set("predicted_direct_error_percent", res.predicted_direct.percent);
+      r.set("target_bounce_rounds", res.target_bounce_rounds);
+      r.set("target_direct_rounds", res.target_direct_rounds);
+      r.set("target_holdout_rays", res.target_holdout_rays);
+    }
     if (res.first_round.rays > 0) {
       r.set("target_first_round_rays", res.first_round.rays);
       r.set("target_first_round_points", static_cast<uint64_t>(res.first_round.points));
@@ -388,6 +395,11 @@ void print_bake_summary(const Report& r) {
                      "{target_first_round_points} vertices predicts noise R^-{target_first_round_decay:2}, at 32-256: {target_first_round_noise})",
                      "              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds, "
                      "{target_samples} more samples in {target_sample_rounds} ({seconds_target:3} s)"});
+  if (r.has("predicted_direct_error_percent"))
+    r.print(stdout, {"              with bounces: the direct light's error {predicted_direct_error_percent:3}%; the bounced error above is "
+                     "measured against paths traced from the held-out samples ({target_holdout_rays} rays); bounce passes at "
+                     "{bounce_rays_per_vertex} rays per vertex after {target_bounce_rounds} rounds of more bounce rays and "
+                     "{target_direct_rounds} of more direct rays"});
   if (r.has("merged_parts"))
     r.print(stdout, {"  rays:       {rays}, traced by {merged_shards} shards in {merged_phases} phases ({merged_parts}) and replayed here"});
   else

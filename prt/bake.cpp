@@ -646,6 +646,164 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
   r.seconds_target = clock.lap();
 }
 
+// The bounce passes from the direct asset values `fitted`, at b.rays per vertex, then (by default)
+// once more at the fit's samples and the fit again: r.transfer becomes the bounced asset.
+void run_bounces(const RayScene& bounce_scene, const BakeOptions& o, const BounceOptions& b, const RowMatrixXd& fitted, const BakeProgress& progress,
+                 BakeResult& r, RowMatrixXd& before_last) {
+  if (progress.stage) progress.stage("bounces", 0);
+  BounceStats st;
+  r.transfer = interreflected_transfer(r.mesh, bounce_scene, fitted, b, &st, &before_last);
+  const uint64_t earlier = r.bounce.rays;
+  r.bounce = st, r.bounce.rays += earlier, r.rays += st.rays, r.bounce_rays = b.rays;
+  const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);  // else the samples lie on the input
+  if (o.bounce.fit_samples && o.fit.method != FitMethod::Point && r.fit_data.samples.size() > 0 && on_own_samples && r.bounce.passes > 0)
+    fit_bounced_samples(bounce_scene, o, b, before_last, fitted, progress, r);
+}
+
+// The noise of the light the passes add at a vertex, as the surface's mean: all B passes read the
+// same R rays, so their sum is one gather of what the last pass bounced (the direct light plus
+// passes 1..B−1) over those rays. Two more gathers at a systematic subset of the vertices, each
+// with rays of its own seed, differ by twice that estimate's variance; the mean of ‖g₁ − g₂‖²/2,
+// area-weighted and halved as interpolation spreads it (reach_target's ½), is its surface noise
+// per channel. (The even and odd rays of one lattice, tried first, overstated it 8-50×: the two
+// halves of one shifted lattice are not independent.)
+double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& before_last, const BounceOptions& bounce, size_t points,
+                    uint64_t* rays) {
+  const size_t V = mesh.num_vertices(), stride = std::max<size_t>(1, (V + points - 1) / std::max<size_t>(points, 1));
+  std::vector<size_t> pick;
+  for (size_t i = 0; i < V; i += stride) pick.push_back(i);
+  const auto n = static_cast<Eigen::Index>(pick.size());
+  const RowMatrixX3d all_offsets = vertex_offset_directions(mesh);
+  RowMatrixX3d p(n, 3), nrm(n, 3), off(n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto i = static_cast<Eigen::Index>(pick[static_cast<size_t>(k)]);
+    p.row(k) = mesh.point(static_cast<uint32_t>(i)).transpose(), nrm.row(k) = mesh.normals.row(i), off.row(k) = all_offsets.row(i);
+  }
+  const std::vector<double> area = vertex_areas(mesh);
+  BounceOptions b = bounce;
+  TransferStats st;
+  b.seed = mix64(bounce.seed ^ 0x9015E1ull);
+  const RowMatrixXd g1 = gather_bounce(mesh, scene, before_last, p, nrm, off, b, &st);
+  *rays += st.rays;
+  b.seed = mix64(bounce.seed ^ 0x9015E2ull);
+  const RowMatrixXd g2 = gather_bounce(mesh, scene, before_last, p, nrm, off, b, &st);
+  *rays += st.rays;
+  double sum = 0, weight = 0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double w = area[pick[static_cast<size_t>(k)]];
+    sum += w * (g1.row(k) - g2.row(k)).squaredNorm() / 2, weight += w;
+  }
+  return sum / std::max(weight, 1e-300) / 2 / (bounce.colour ? 3 : 1);
+}
+
+// --error with bounces: the target holds for the bounced asset, whose error the hold-out measures
+// against bounced light traced as paths (bounced_holdout: eval's reference, never the asset). The
+// bounced error has three parts: the direct light's (its noise and interpolation, which the
+// bounces carry along), the bounce passes' own noise (R rays per vertex and pass), and what the
+// bounces' interpolation adds. While it is above the target, the excess Δ = E_b² − E² goes to
+// whichever of the two rays can lower it at the smaller cost, each costed with the passes it
+// makes run again:
+//   - the passes' rays: their noise N_b (from each vertex's even and odd rays) falls as 1/R, so
+//     R·N_b/(N_b − Δ) rays remove Δ; the passes then run again at that count, every pass of them
+//     (once with the hit cache) plus the fit samples' bounce;
+//   - the direct light's rays: reach_target again at the direct error that leaves room for Δ (its
+//     noise N_d must hold Δ), then the passes again at their count.
+// When neither noise holds Δ the excess is interpolation, which rays do not lower: a warning
+// says to refine, as reach_target's does.
+void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, const BakeOptions& o, const BounceOptions& bounce, RowMatrixXd fitted,
+                          RowMatrixXd before_last, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
+  BounceOptions b = bounce;
+  PathOptions po;
+  po.order = o.transfer.order, po.paths = o.target_paths, po.bounces = r.bounce.passes, po.albedo = b.albedo, po.colour = b.colour;
+  po.seed = mix64(o.transfer.seed ^ 0xB0CE5401Dull), po.threads = o.transfer.threads;  // independent of every bake ray
+  if (progress.stage) progress.stage("bounced hold-out", 0);
+  TransferStats st;
+  const Holdout held = bounced_holdout(r.mesh, bounce_scene, holdout_subset(r.fit_data.plan.holdout, o.target_paths_points), po, &st);
+  r.rays += st.rays, r.target_holdout_rays += st.rays;
+  r.predicted_direct = r.predicted;
+  r.predicted = holdout_error(r.mesh, held, r.transfer);
+  const std::vector<double> w = vertex_areas(r.mesh);
+  double area = 0;
+  for (double a : w) area += a;
+  const double unit = unshadowed_norm(o.transfer.order) / 100;
+  // A vertex's variance, averaged over the surface as interpolation spreads it (reach_target's ½).
+  const auto surface_noise = [&](const std::vector<double>& v) {
+    double sum = 0;
+    for (size_t i = 0; i < w.size() && i < v.size(); ++i)
+      if (std::isfinite(v[i])) sum += w[i] * v[i];
+    return sum / (2 * std::max(area, 1e-300));
+  };
+  const double V = double(r.mesh.num_vertices()), pass_cost = r.bounce.cached ? 1.0 : std::max(r.bounce.passes, 1);
+  const double sample_cost = double(r.fit_data.samples.size()) * std::max(r.fit_data.sample_rays, 1);
+  for (int round = 1; round <= 4 && r.predicted.percent > o.target_error; ++round) {
+    const double excess = std::pow(r.predicted.percent * unit, 2) - std::pow(o.target_error * unit, 2);
+    const double nb = bounce_noise(r.mesh, bounce_scene, before_last, b, o.target_paths_points / 4, &r.target_holdout_rays);
+    const double nd = surface_noise(r.point_variance);
+    const double rebounce = V * b.rays * pass_cost + (o.bounce.fit_samples ? sample_cost : 0);
+    // The passes' rays: enough to remove Δ where their noise holds it, else a quadrupling.
+    const double factor_b = nb > 1.05 * excess ? nb / (nb - excess) : 4;
+    int rays_b = b.rays;
+    while (rays_b < b.rays * factor_b && rays_b < std::min(16 * bounce.rays, 1 << 16)) rays_b *= 2;
+    const double cost_b = V * rays_b * pass_cost + (o.bounce.fit_samples ? sample_cost : 0);
+    // The direct rays: the vertex rays traced so far, times what the same 1/R law asks.
+    double traced = 0;
+    for (double n : r.vertex_rays) traced += n;
+    const double cost_d = nd > 1.05 * excess ? traced * excess / (nd - excess) + rebounce : INFINITY;
+    const bool bounce_can = rays_b > b.rays && nb > 1.05 * excess, direct_can = std::isfinite(cost_d);
+    // Neither alone: the passes' noise cut to a quarter, and the direct light's for the rest.
+    const double rest = excess - 0.75 * nb;
+    const bool both = !bounce_can && !direct_can && b.rays * 4 <= std::min(16 * bounce.rays, 1 << 16) && nd > 1.05 * rest;
+    if (!bounce_can && !direct_can && !both) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf, "--error %g: the bounced asset's %.3f%% is mostly interpolation (its noise: direct %.3f%%, bounces %.3f%%), "
+                    "which more rays do not lower; refine (--refine adaptive --budget)", o.target_error, r.predicted.percent,
+                    std::sqrt(nd) / unit, std::sqrt(nb) / unit);
+      r.warnings.push_back(buf);
+      break;
+    }
+    const double before = std::pow(r.predicted.percent * unit, 2);
+    double expected;
+    if (bounce_can && (!direct_can || cost_b <= cost_d)) {
+      expected = nb * (1 - double(b.rays) / rays_b);
+      b.rays = rays_b;
+      ++r.target_bounce_rounds;
+    } else {
+      if (both) b.rays *= 4, ++r.target_bounce_rounds;
+      // The direct asset aimed at the error that leaves the rest of Δ to the other parts.
+      BakeOptions direct = o;
+      const double cut = both ? rest : excess;
+      expected = both ? excess : cut;
+      direct.target_error = std::sqrt(std::max(0.0, std::pow(r.predicted_direct.percent * unit, 2) - cut)) / unit;
+      r.transfer = fitted;
+      r.predicted = r.predicted_direct;
+      const size_t said = r.warnings.size();
+      reach_target(scene, direct, progress, clock, r);
+      r.warnings.resize(said);  // its target is this loop's, not the user's: judged below
+      fitted = r.transfer, r.predicted_direct = r.predicted;
+      ++r.target_direct_rounds;
+    }
+    run_bounces(bounce_scene, o, b, fitted, progress, r, before_last);
+    r.predicted = holdout_error(r.mesh, held, r.transfer);
+    // The noise model is only a model: rays that lowered the measured error by less than a
+    // quarter of what it promised will not do better next round.
+    if (before - std::pow(r.predicted.percent * unit, 2) < 0.25 * expected && r.predicted.percent > o.target_error) {
+      char buf[300];
+      std::snprintf(buf, sizeof buf, "--error %g: more rays lowered the bounced asset's error only to %.3f%%; the rest is interpolation, "
+                    "which rays do not lower; refine (--refine adaptive --budget)", o.target_error, r.predicted.percent);
+      r.warnings.push_back(buf);
+      break;
+    }
+  }
+  if (r.predicted.percent > o.target_error) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "--error %g: the bounced asset reached %.3f%% (bounce passes at %d rays per vertex)", o.target_error,
+                  r.predicted.percent, b.rays);
+    bool said = false;
+    for (const std::string& m : r.warnings) said = said || m.rfind("--error", 0) == 0;
+    if (!said) r.warnings.push_back(buf);
+  }
+}
+
 }  // namespace
 
 RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatrixXd& prior, const std::vector<double>& prior_variance,
@@ -826,19 +984,17 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
       b.noise_percent = 100 * std::sqrt(num / std::max(den, 1e-300)) / unshadowed_norm(o.transfer.order);
     }
     if (o.albedo_colour.coloured()) b.colour = std::make_shared<const AlbedoField>(r.mesh, o.albedo_colour);
-    if (progress.stage) progress.stage("bounces", 0);
     // A bounce reads the values of the triangle a ray hits, so the scene must hold the asset's own
     // triangles: after adaptive refinement or simplification it is built again (visibility alone,
     // as every stage before needed, does not care which triangles tile the surface).
     const std::unique_ptr<RayScene> own = scene_for(r.mesh, scene, o);
     const RayScene& bounce_scene = own ? *own : scene;
-    RowMatrixXd before_last;
     const RowMatrixXd fitted = r.transfer;
-    r.transfer = interreflected_transfer(r.mesh, bounce_scene, fitted, b, &r.bounce, &before_last);
-    r.rays += r.bounce.rays;
-    const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);  // else the samples lie on the input
-    if (o.bounce.fit_samples && o.fit.method != FitMethod::Point && r.fit_data.samples.size() > 0 && on_own_samples && r.bounce.passes > 0)
-      fit_bounced_samples(bounce_scene, o, b, before_last, fitted, progress, r);
+    RowMatrixXd before_last;
+    run_bounces(bounce_scene, o, b, fitted, progress, r, before_last);
+    const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);
+    if (o.target_error > 0 && on_own_samples && r.fit_data.allocation == SampleAllocation::Pilot && r.fit_data.plan.holdout.size() > 0)
+      reach_bounced_target(scene, bounce_scene, o, b, fitted, before_last, progress, clock, r);
     if (b.colour) r.albedo = b.colour->vertices();
     r.seconds_bounce = clock.lap();
   }

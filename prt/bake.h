@@ -101,6 +101,10 @@ struct BakeOptions {
   //! (choose_first_rays), so that a loose target costs a cheap bake (later rounds add what the
   //! hold-out finds missing). The CLI sets it when --error is given without --rays.
   bool rays_auto = false;
+  //! With target_error and bounces: paths per held-out sample for its bounced light
+  //! (bounced_holdout), which the target then holds for
+  int target_paths = 128;
+  size_t target_paths_points = 8192;  //!< ... on at most this many of the held-out samples (holdout_subset)
   //! rays per surface sample; with the pilot and sample_rays_auto, the budget of sample rays this
   //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split among
   //! sample_ray_choices as the pilot's measurements say (choose_sample_rays: 4 where shadows cross
@@ -180,6 +184,13 @@ struct BakeResult {
   size_t target_samples = 0;        //!< --error: the samples they added ...
   uint64_t target_sample_rays = 0;  //!< ... and their rays
   FirstRoundChoice first_round;     //!< rays_auto: the first round's rays and why (rays 0 otherwise)
+  //! --error with bounces: `predicted` is the bounced asset's; this is its direct light's, before
+  //! the bounces (all 0 without them)
+  ErrorEstimate predicted_direct;
+  int bounce_rays = 0;              //!< rays per vertex of each bounce pass, as run last (0: no bounces)
+  int target_bounce_rounds = 0;     //!< --error with bounces: bounce passes run again with more rays ...
+  int target_direct_rounds = 0;     //!< ... or after more direct vertex rays
+  uint64_t target_holdout_rays = 0;  //!< --error with bounces: the held-out samples' paths
   FitStats fit;
   double alpha = 0;  //!< the fit's regulariser weight as used (chosen, with alpha_auto)
   //! alpha_auto: each candidate α and the held-out error of its fit, in percent (empty otherwise)

@@ -7,6 +7,8 @@
 // the asset's interpolated value g(p), E‖f̂ − g‖² = E‖f − g‖² + v: so ‖f̂ − g‖² − v estimates the
 // asset's squared error at p, noise and interpolation error together, and the area-weighted
 // mean over the set estimates eval's mean. Its standard error comes from the terms' spread.
+// A bounced asset is judged against bounced light: the held-out samples' references gain it from
+// paths through the surface (bounced_holdout), each with its own variance, the same way.
 // Caveat: which faces the fit sampled depended on the pilot's values, so the set is not quite
 // independent of the asset there (BENCHMARKS.md measures the prediction against eval).
 #include "prtsub/prt/error_estimate.h"
@@ -17,6 +19,20 @@
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
+namespace {
+
+// RGB transfer holds three blocks of N² values (docs/sh_convention.md, "Colour").
+int value_channels(Eigen::Index columns) {
+  const auto square = [](Eigen::Index n) {
+    const auto r = static_cast<Eigen::Index>(std::lround(std::sqrt(static_cast<double>(n))));
+    return n > 0 && r * r == n;
+  };
+  if (square(columns)) return 1;
+  if (columns % 3 == 0 && square(columns / 3)) return 3;  // 3·N² is never a square
+  throw InputError("hold-out error: " + std::to_string(columns) + " values per point are neither N² nor 3·N²");
+}
+
+}  // namespace
 
 ErrorEstimate holdout_error(const Mesh& mesh, const Holdout& h, const RowMatrixXd& values) {
   if (static_cast<size_t>(values.rows()) != mesh.num_vertices()) throw InputError("hold-out error: one row of values per vertex expected");
@@ -38,11 +54,14 @@ ErrorEstimate holdout_error(const Mesh& mesh, const Holdout& h, const RowMatrixX
   if (!(sw > 0)) return e;
   const double mean = sum / sw;
   // The weighted mean's variance: Σw²·s² / (Σw)², s² the terms' weighted variance.
-  const double spread = std::max(0.0, sum2 / sw - mean * mean), se2 = std::sqrt(sw2 * spread) / sw;
-  const int order = static_cast<int>(std::lround(std::sqrt(static_cast<double>(values.cols()))));
-  const double unit = unshadowed_norm(order), e2 = std::max(0.0, mean);
+  const double spread = std::max(0.0, sum2 / sw - mean * mean);
+  double se2 = std::sqrt(sw2 * spread) / sw;
+  const int channels = value_channels(values.cols());
+  const int order = static_cast<int>(std::lround(std::sqrt(static_cast<double>(values.cols() / channels))));
+  const double unit = unshadowed_norm(order), e2 = std::max(0.0, mean / channels);  // RGB: the RMS over channels, as eval
   e.percent = 100 * std::sqrt(e2) / unit;
   // δE = δ(E²) / 2E; near 0 the bound √se2 is the honest one.
+  se2 /= channels;
   e.standard_error = 100 * (e2 > se2 ? se2 / (2 * std::sqrt(e2)) : std::sqrt(se2)) / unit;
   return e;
 }
@@ -68,6 +87,47 @@ ErrorDifference holdout_difference(const Mesh& mesh, const Holdout& h, const Row
   d.mean = sum / sw;
   d.standard_error = std::sqrt(sw2 * std::max(0.0, sum2 / sw - d.mean * d.mean)) / sw;
   return d;
+}
+
+Holdout holdout_subset(const Holdout& h, size_t count) {
+  if (count == 0 || h.size() <= count) return h;
+  const size_t stride = (h.size() + count - 1) / count;
+  Holdout out;
+  const auto n = static_cast<Eigen::Index>((h.size() + stride - 1) / stride);
+  out.barycentric.resize(n, 3);
+  out.values.resize(n, h.values.cols());
+  for (size_t k = 0, j = 0; k < h.size(); k += stride, ++j) {
+    const auto a = static_cast<Eigen::Index>(k), b = static_cast<Eigen::Index>(j);
+    out.face.push_back(h.face[k]), out.weight.push_back(h.weight[k]), out.variance.push_back(h.variance[k]);
+    out.barycentric.row(b) = h.barycentric.row(a), out.values.row(b) = h.values.row(a);
+  }
+  return out;
+}
+
+Holdout bounced_holdout(const Mesh& mesh, const RayScene& scene, const Holdout& h, const PathOptions& o, TransferStats* stats) {
+  const auto n = static_cast<Eigen::Index>(h.size());
+  if (h.barycentric.rows() != n || h.values.rows() != n || h.variance.size() != h.size())
+    throw InputError("bounced hold-out: the samples' arrays differ in length");
+  RowMatrixX3d points(n, 3), normals(n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const uint32_t f = h.face[static_cast<size_t>(k)];
+    if (f >= mesh.num_faces()) throw InputError("bounced hold-out: a sample's face is not on the mesh");
+    const Triangle& t = mesh.triangles[f];
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), nrm = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 3; ++c) p += h.barycentric(k, c) * mesh.point(t[c]), nrm += h.barycentric(k, c) * mesh.normals.row(t[c]).transpose();
+    if (!(nrm.norm() > 1e-12)) nrm = (mesh.point(t[1]) - mesh.point(t[0])).cross(mesh.point(t[2]) - mesh.point(t[0]));
+    if (!(nrm.norm() > 0)) nrm = Eigen::Vector3d::UnitZ();
+    points.row(k) = p.transpose(), normals.row(k) = nrm.normalized().transpose();
+  }
+  const RowMatrixX3d corners = vertex_positions(mesh);
+  const PathSurface surface{corners, mesh.normals, mesh.triangles};
+  std::vector<double> variance;
+  const RowMatrixXd bounced = path_traced_transfer(scene, surface, points, normals, o, &variance, stats);
+  const int channels = o.colour ? 3 : 1;
+  Holdout out = h;
+  out.values = (h.values.cast<double>().replicate(1, channels) + bounced).cast<float>();
+  for (size_t k = 0; k < h.size(); ++k) out.variance[k] = channels * h.variance[k] + variance[k];
+  return out;
 }
 
 }  // namespace prtsub

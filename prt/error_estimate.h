@@ -2,6 +2,7 @@
 // reference, from samples held out of every estimate the asset was built from.
 #pragma once
 
+#include "prtsub/prt/path_transfer.h"
 #include "prtsub/prt/sample_plan.h"
 
 namespace prtsub {
@@ -15,9 +16,24 @@ struct ErrorEstimate {
 //! E² = Σ_k w_k (‖f̂_k − g(p_k)‖² − v_k) / Σ_k w_k over the hold-out samples k: f̂_k their traced
 //! values, v_k their variances, g the asset's interpolated values. Each term is an unbiased
 //! estimate of ‖f − g‖² at p_k, as long as f̂_k's rays are independent of those g was made from.
-//! \param values #V by K, the asset's vertex values (order-1 transfer for AO)
+//! \param values #V by K, the asset's vertex values (order-1 transfer for AO); #V by 3·N² for RGB
+//!        transfer, whose error is the RMS over the three channels, as eval's
 //! \throw InputError for shapes that do not match
 ErrorEstimate holdout_error(const Mesh& mesh, const Holdout& holdout, const RowMatrixXd& values);
+
+//! At most `count` of the hold-out's samples, every ⌈n / count⌉-th (a systematic subset, which
+//! keeps the samples' spread over the surface), with their weights, values and variances.
+Holdout holdout_subset(const Holdout& holdout, size_t count);
+
+//! The hold-out for a bounced asset: each sample's reference gains the light of `options.bounces`
+//! bounces, path-traced through the surface from the sample's point (path_traced_transfer: eval's
+//! own reference, which never reads the asset's values), and its paths' variance joins the
+//! sample's, so holdout_error stays an unbiased estimate of eval's error against bounced light.
+//! With `options.colour` the values become RGB (3·N², every channel's direct light the same).
+//! \param scene holds `mesh`'s triangles in order (position_triangles), which the paths bounce on
+//! \throw InputError for shapes that do not match, EmbreeError
+Holdout bounced_holdout(const Mesh& mesh, const RayScene& scene, const Holdout& holdout, const PathOptions& options,
+                        TransferStats* stats = nullptr);
 
 //! Two sets of values judged on the same held-out samples, paired: the weighted mean over the
 //! samples of ‖f̂_k − a(p_k)‖² − ‖f̂_k − b(p_k)‖², how much lower b's squared error is than a's

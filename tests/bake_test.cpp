@@ -237,6 +237,57 @@ TEST(Bake, AnErrorTargetThatInterpolationHoldsUpGivesTheFitMoreSamples) {
   EXPECT_EQ((one.transfer - more.transfer).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Bake, WithBouncesAnErrorTargetIsMeasuredOnTheBouncedAssetAndEvalAgrees) {
+  // A sphere on a ground with 2 bounces at albedo 0.8: the ground under the sphere gets much of
+  // its light from it. The prediction must be the bounced asset's (eval's reference with paths,
+  // never the asset, judges the same), and above the direct light's alone.
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.transfer.rays = 64, o.bounce.bounces = 2, o.target_error = 50;  // loose: met at once, measured
+  const BakeResult r = bake(mesh, o);
+  ASSERT_GT(r.predicted_direct.samples, 0u);
+  EXPECT_EQ(r.target_bounce_rounds + r.target_direct_rounds, 0);
+  EXPECT_GT(r.target_holdout_rays, 0u);
+  EXPECT_EQ(r.bounce_rays, 64);
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  ReferenceOptions ro;
+  ro.points = 4000, ro.rays = 1024, ro.bounces = 2, ro.paths = 1024;
+  const Reference ref = make_reference(mesh, scene, ro);
+  const EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, r.transfer);
+  // eval's RMS holds its reference's own noise; without it, the asset's error.
+  const double truth = std::sqrt(std::max(0.0, std::pow(e.rms_percent, 2) - std::pow(e.noise_floor_percent, 2)));
+  std::printf("bounced: predicted %.3f%% (± %.3f), eval %.3f%% (floor %.3f); direct predicted %.3f%%\n", r.predicted.percent,
+              r.predicted.standard_error, truth, e.noise_floor_percent, r.predicted_direct.percent);
+  EXPECT_NEAR(r.predicted.percent, truth, 0.25 * truth);
+  // The direct light's error alone, what the target was measured on before, misses what eval finds.
+  EXPECT_GT(r.predicted.percent, r.predicted_direct.percent);
+}
+
+TEST(Bake, WithBouncesATargetBelowTheBouncedErrorBuysMoreRays) {
+  // A fine ground under a high half-plane (the first error target's scene), 4 rays per vertex
+  // and pass: the light changes slowly, so noise is what is left, and a target 15% below the
+  // first bake's error buys rays (bounce or direct) until it is met or a warning says why not;
+  // the measured error falls and every ray is counted.
+  const Mesh mesh = test::build(test::merge(test::grid(16, 0.3), test::quad(50, 0.4, false, 0.5)));
+  BakeOptions o;
+  o.transfer.rays = 4, o.vertex_share = 0, o.bounce.bounces = 2, o.target_error = 80;
+  const BakeResult first = bake(mesh, o);
+  o.target_error = 0.85 * first.predicted.percent;
+  const BakeResult more = bake(mesh, o);
+  std::printf("first %.3f%%, target %.3f%%: %.3f%% after %d bounce and %d direct rounds (bounce rays %d) %s\n", first.predicted.percent, o.target_error, more.predicted.percent, more.target_bounce_rounds, more.target_direct_rounds, more.bounce_rays, more.warnings.empty() ? "" : more.warnings.back().c_str());
+  EXPECT_GE(more.target_bounce_rounds + more.target_direct_rounds, 1);
+  if (more.target_bounce_rounds > 0) {
+    EXPECT_GT(more.bounce_rays, 4);
+  }
+  EXPECT_TRUE(more.predicted.percent <= o.target_error || !more.warnings.empty());
+  EXPECT_LT(more.predicted.percent, first.predicted.percent);
+  EXPECT_GT(more.rays, first.rays);
+  // Thread counts do not change the rounds.
+  o.transfer.threads = 1;
+  const BakeResult one = bake(mesh, o);
+  EXPECT_EQ((one.transfer - more.transfer).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(Bake, ABudgetBelowTheInputSimplifiesAndTheFitToTheSourceBeatsItsPointValues) {
   // A sphere resting on a plane: the contact shadow is what a simplified asset must keep.
   const Mesh mesh = test::build(test::merge(test::icosphere(3), test::transformed(test::grid(16), 5.0, Eigen::Vector3d(-2.5, -2.5, -1))));

@@ -132,5 +132,39 @@ TEST(HoldoutError, EmptyOrMismatchedSets) {
   EXPECT_THROW(holdout_error(s.mesh, s.h, RowMatrixXd::Zero(Eigen::Index(s.mesh.num_vertices()), 9)), InputError);
 }
 
+TEST(HoldoutError, RgbValuesAreJudgedAsTheRmsOverTheirChannels) {
+  // Three blocks of the same values: the same error as one; one block off by δ: a third of its square.
+  const HeldOut s(linear, 0.0, 20);
+  RowMatrixXd off = at_vertices(s.mesh, linear);
+  off.array() += 0.01;
+  Holdout rgb = s.h;
+  rgb.values = s.h.values.replicate(1, 3).eval();
+  const double one = holdout_error(s.mesh, s.h, off).percent;
+  EXPECT_NEAR(holdout_error(s.mesh, rgb, off.replicate(1, 3)).percent, one, 1e-9);
+  RowMatrixXd first_only = at_vertices(s.mesh, linear).replicate(1, 3);
+  first_only.leftCols(4).array() += 0.01;
+  EXPECT_NEAR(holdout_error(s.mesh, rgb, first_only).percent, one / std::sqrt(3.0), 1e-4);
+  EXPECT_THROW(holdout_error(s.mesh, rgb, RowMatrixXd::Zero(Eigen::Index(s.mesh.num_vertices()), 8)), InputError);
+}
+
+TEST(HoldoutError, ASubsetKeepsEveryKthSampleWithItsWeightValueAndVariance) {
+  const HeldOut s(linear, 0.01, 7);
+  const size_t n = s.h.size();
+  const Holdout sub = holdout_subset(s.h, n / 3);
+  const size_t stride = (n + n / 3 - 1) / (n / 3);
+  ASSERT_EQ(sub.size(), (n + stride - 1) / stride);
+  EXPECT_LE(sub.size(), n / 3);
+  for (size_t j = 0; j < sub.size(); ++j) {
+    const size_t k = j * stride;
+    EXPECT_EQ(sub.face[j], s.h.face[k]);
+    EXPECT_EQ(sub.weight[j], s.h.weight[k]);
+    EXPECT_EQ(sub.variance[j], s.h.variance[k]);
+    EXPECT_EQ(sub.barycentric.row(Eigen::Index(j)), s.h.barycentric.row(Eigen::Index(k)));
+    EXPECT_EQ(sub.values.row(Eigen::Index(j)), s.h.values.row(Eigen::Index(k)));
+  }
+  EXPECT_EQ(holdout_subset(s.h, n).size(), n);
+  EXPECT_EQ(holdout_subset(s.h, 0).size(), n);
+}
+
 }  // namespace
 }  // namespace prtsub
