@@ -230,6 +230,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
       r.set("bounce_change_percent_" + std::to_string(k + 1), res.bounce.change_percent[k]);
     r.set("bounce_rays", res.bounce.rays);
     r.set("bounce_rays_per_vertex", res.bounce_rays);
+    r.set("bounce_rays_chosen", res.bounce_rays_chosen);
     r.set("bounce_cached", res.bounce.cached);
     r.set("bounce_cache_mib", res.bounce.cache_mib);
     r.set("seconds_bounce", res.seconds_bounce);
@@ -397,8 +398,8 @@ void print_bake_summary(const Report& r) {
                      "{target_samples} more samples in {target_sample_rounds} ({seconds_target:3} s)"});
   if (r.has("predicted_direct_error_percent"))
     r.print(stdout, {"              with bounces: the direct light's error {predicted_direct_error_percent:3}%; the bounced error above is "
-                     "measured against paths traced from the held-out samples ({target_holdout_rays} rays); bounce passes at "
-                     "{bounce_rays_per_vertex} rays per vertex after {target_bounce_rounds} rounds of more bounce rays and "
+                     "measured against paths traced from the held-out samples ({target_holdout_rays} rays with the passes' noise); bounce "
+                     "passes first at {bounce_rays_chosen} rays per vertex, at {bounce_rays_per_vertex} after {target_bounce_rounds} rounds of more bounce rays and "
                      "{target_direct_rounds} of more direct rays"});
   if (r.has("merged_parts"))
     r.print(stdout, {"  rays:       {rays}, traced by {merged_shards} shards in {merged_phases} phases ({merged_parts}) and replayed here"});

@@ -649,9 +649,10 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
 // The bounce passes from the direct asset values `fitted`, at b.rays per vertex, then (by default)
 // once more at the fit's samples and the fit again: r.transfer becomes the bounced asset.
 void run_bounces(const RayScene& bounce_scene, const BakeOptions& o, const BounceOptions& b, const RowMatrixXd& fitted, const BakeProgress& progress,
-                 BakeResult& r, RowMatrixXd& before_last) {
+                 BakeResult& r) {
   if (progress.stage) progress.stage("bounces", 0);
   BounceStats st;
+  RowMatrixXd before_last;
   r.transfer = interreflected_transfer(r.mesh, bounce_scene, fitted, b, &st, &before_last);
   const uint64_t earlier = r.bounce.rays;
   r.bounce = st, r.bounce.rays += earlier, r.rays += st.rays, r.bounce_rays = b.rays;
@@ -660,40 +661,19 @@ void run_bounces(const RayScene& bounce_scene, const BakeOptions& o, const Bounc
     fit_bounced_samples(bounce_scene, o, b, before_last, fitted, progress, r);
 }
 
-// The noise of the light the passes add at a vertex, as the surface's mean: all B passes read the
-// same R rays, so their sum is one gather of what the last pass bounced (the direct light plus
-// passes 1..B−1) over those rays. Two more gathers at a systematic subset of the vertices, each
-// with rays of its own seed, differ by twice that estimate's variance; the mean of ‖g₁ − g₂‖²/2,
-// area-weighted and halved as interpolation spreads it (reach_target's ½), is its surface noise
-// per channel. (The even and odd rays of one lattice, tried first, overstated it 8-50×: the two
-// halves of one shifted lattice are not independent.)
-double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& before_last, const BounceOptions& bounce, size_t points,
-                    uint64_t* rays) {
-  const size_t V = mesh.num_vertices(), stride = std::max<size_t>(1, (V + points - 1) / std::max<size_t>(points, 1));
-  std::vector<size_t> pick;
-  for (size_t i = 0; i < V; i += stride) pick.push_back(i);
-  const auto n = static_cast<Eigen::Index>(pick.size());
-  const RowMatrixX3d all_offsets = vertex_offset_directions(mesh);
-  RowMatrixX3d p(n, 3), nrm(n, 3), off(n, 3);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const auto i = static_cast<Eigen::Index>(pick[static_cast<size_t>(k)]);
-    p.row(k) = mesh.point(static_cast<uint32_t>(i)).transpose(), nrm.row(k) = mesh.normals.row(i), off.row(k) = all_offsets.row(i);
-  }
-  const std::vector<double> area = vertex_areas(mesh);
-  BounceOptions b = bounce;
-  TransferStats st;
-  b.seed = mix64(bounce.seed ^ 0x9015E1ull);
-  const RowMatrixXd g1 = gather_bounce(mesh, scene, before_last, p, nrm, off, b, &st);
-  *rays += st.rays;
-  b.seed = mix64(bounce.seed ^ 0x9015E2ull);
-  const RowMatrixXd g2 = gather_bounce(mesh, scene, before_last, p, nrm, off, b, &st);
-  *rays += st.rays;
-  double sum = 0, weight = 0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double w = area[pick[static_cast<size_t>(k)]];
-    sum += w * (g1.row(k) - g2.row(k)).squaredNorm() / 2, weight += w;
-  }
-  return sum / std::max(weight, 1e-300) / 2 / (bounce.colour ? 3 : 1);
+// --error with bounces, before the passes run: their rays per vertex. They start at the direct
+// light's count; where the target leaves room, fewer: the least power of two, at least 8, whose
+// predicted noise (bounce_noise ahead of the passes, falling as 1/R) takes at most a quarter of
+// the room the direct light leaves, E² − E_direct². The rest of the room is for what the bounces'
+// interpolation adds, which is not known before they run. Never more: the rounds after the
+// passes add rays where the measured error asks for them.
+int choose_bounce_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& b, double room,
+                       uint64_t* rays) {
+  if (!(room > 0) || b.rays <= 8) return b.rays;
+  const double noise = bounce_noise(mesh, scene, direct, b, 2048, rays);
+  int r = b.rays;
+  while (r / 2 >= 8 && noise * b.rays / (r / 2) <= 0.25 * room) r /= 2;
+  return r;
 }
 
 // --error with bounces: the target holds for the bounced asset, whose error the hold-out measures
@@ -703,7 +683,7 @@ double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& 
 // bounces' interpolation adds. While it is above the target, the excess Δ = E_b² − E² goes to
 // whichever of the two rays can lower it at the smaller cost, each costed with the passes it
 // makes run again:
-//   - the passes' rays: their noise N_b (from each vertex's even and odd rays) falls as 1/R, so
+//   - the passes' rays: their noise N_b (bounce_noise: two gathers of seeds of their own) falls as 1/R, so
 //     R·N_b/(N_b − Δ) rays remove Δ; the passes then run again at that count, every pass of them
 //     (once with the hit cache) plus the fit samples' bounce;
 //   - the direct light's rays: reach_target again at the direct error that leaves room for Δ (its
@@ -711,7 +691,7 @@ double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& 
 // When neither noise holds Δ the excess is interpolation, which rays do not lower: a warning
 // says to refine, as reach_target's does.
 void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, const BakeOptions& o, const BounceOptions& bounce, RowMatrixXd fitted,
-                          RowMatrixXd before_last, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
+                          const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
   BounceOptions b = bounce;
   PathOptions po;
   po.order = o.transfer.order, po.paths = o.target_paths, po.bounces = r.bounce.passes, po.albedo = b.albedo, po.colour = b.colour;
@@ -737,11 +717,25 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
   const double sample_cost = double(r.fit_data.samples.size()) * std::max(r.fit_data.sample_rays, 1);
   for (int round = 1; round <= 4 && r.predicted.percent > o.target_error; ++round) {
     const double excess = std::pow(r.predicted.percent * unit, 2) - std::pow(o.target_error * unit, 2);
-    const double nb = bounce_noise(r.mesh, bounce_scene, before_last, b, o.target_paths_points / 4, &r.target_holdout_rays);
+    uint64_t noise_rays = 0;
+    BounceOptions run = b;
+    run.bounces = r.bounce.passes;
+    const double nb = bounce_noise(r.mesh, bounce_scene, fitted, run, o.target_paths_points / 4, &noise_rays);
+    r.rays += noise_rays, r.target_holdout_rays += noise_rays;
     const double nd = surface_noise(r.point_variance);
     const double rebounce = V * b.rays * pass_cost + (o.bounce.fit_samples ? sample_cost : 0);
     // The passes' rays: enough to remove Δ where their noise holds it, else a quadrupling.
-    const double factor_b = nb > 1.05 * excess ? nb / (nb - excess) : 4;
+    // bounce_noise is an estimate from above (1.2-2.3× the passes' noise, ScenesBounceNoise): the
+    // passes' rays are bought only when a fraction kLow of it still holds Δ, and sized for that
+    // fraction. And only where the vertices' bounced values are the asset's: when the fit's
+    // samples gather their own bounce and the fit runs again (the default), it averages the
+    // vertices' bounce noise away, and more bounce rays at the vertices barely move the asset
+    // (tried on conference: a round of 4× the bounce rays, which their noise said would reach the
+    // target, lowered the error by a few hundredths of a percent).
+    constexpr double kLow = 0.4;
+    const bool fitted_bounce = o.bounce.fit_samples && o.fit.method != FitMethod::Point && r.fit_data.samples.size() > 0;
+    const double low = fitted_bounce ? 0 : kLow * nb;
+    const double factor_b = low > 1.05 * excess ? low / (low - excess) : 4;
     int rays_b = b.rays;
     while (rays_b < b.rays * factor_b && rays_b < std::min(16 * bounce.rays, 1 << 16)) rays_b *= 2;
     const double cost_b = V * rays_b * pass_cost + (o.bounce.fit_samples ? sample_cost : 0);
@@ -749,9 +743,9 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
     double traced = 0;
     for (double n : r.vertex_rays) traced += n;
     const double cost_d = nd > 1.05 * excess ? traced * excess / (nd - excess) + rebounce : INFINITY;
-    const bool bounce_can = rays_b > b.rays && nb > 1.05 * excess, direct_can = std::isfinite(cost_d);
+    const bool bounce_can = rays_b > b.rays && low > 1.05 * excess, direct_can = std::isfinite(cost_d);
     // Neither alone: the passes' noise cut to a quarter, and the direct light's for the rest.
-    const double rest = excess - 0.75 * nb;
+    const double rest = excess - 0.75 * low;
     const bool both = !bounce_can && !direct_can && b.rays * 4 <= std::min(16 * bounce.rays, 1 << 16) && nd > 1.05 * rest;
     if (!bounce_can && !direct_can && !both) {
       char buf[300];
@@ -764,7 +758,7 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
     const double before = std::pow(r.predicted.percent * unit, 2);
     double expected;
     if (bounce_can && (!direct_can || cost_b <= cost_d)) {
-      expected = nb * (1 - double(b.rays) / rays_b);
+      expected = low * (1 - double(b.rays) / rays_b);
       b.rays = rays_b;
       ++r.target_bounce_rounds;
     } else {
@@ -782,7 +776,7 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
       fitted = r.transfer, r.predicted_direct = r.predicted;
       ++r.target_direct_rounds;
     }
-    run_bounces(bounce_scene, o, b, fitted, progress, r, before_last);
+    run_bounces(bounce_scene, o, b, fitted, progress, r);
     r.predicted = holdout_error(r.mesh, held, r.transfer);
     // The noise model is only a model: rays that lowered the measured error by less than a
     // quarter of what it promised will not do better next round.
@@ -990,11 +984,19 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     const std::unique_ptr<RayScene> own = scene_for(r.mesh, scene, o);
     const RayScene& bounce_scene = own ? *own : scene;
     const RowMatrixXd fitted = r.transfer;
-    RowMatrixXd before_last;
-    run_bounces(bounce_scene, o, b, fitted, progress, r, before_last);
     const bool on_own_samples = !(r.simplified && r.simplify.collapses > 0);
-    if (o.target_error > 0 && on_own_samples && r.fit_data.allocation == SampleAllocation::Pilot && r.fit_data.plan.holdout.size() > 0)
-      reach_bounced_target(scene, bounce_scene, o, b, fitted, before_last, progress, clock, r);
+    const bool target = o.target_error > 0 && on_own_samples && r.fit_data.allocation == SampleAllocation::Pilot && r.fit_data.plan.holdout.size() > 0;
+    if (target && !b.until_converged) {
+      const double unit = unshadowed_norm(o.transfer.order) / 100;
+      const double room = std::pow(o.target_error * unit, 2) - std::pow(r.predicted.percent * unit, 2);
+      if (progress.stage) progress.stage("bounce rays", 0);
+      uint64_t noise_rays = 0;
+      b.rays = choose_bounce_rays(r.mesh, bounce_scene, fitted, b, room, &noise_rays);
+      r.rays += noise_rays, r.target_holdout_rays += noise_rays;
+    }
+    r.bounce_rays_chosen = b.rays;
+    run_bounces(bounce_scene, o, b, fitted, progress, r);
+    if (target) reach_bounced_target(scene, bounce_scene, o, b, fitted, progress, clock, r);
     if (b.colour) r.albedo = b.colour->vertices();
     r.seconds_bounce = clock.lap();
   }

@@ -188,9 +188,10 @@ struct BakeResult {
   //! the bounces (all 0 without them)
   ErrorEstimate predicted_direct;
   int bounce_rays = 0;              //!< rays per vertex of each bounce pass, as run last (0: no bounces)
+  int bounce_rays_chosen = 0;       //!< ... as first run: with --error, fewer than the direct light's where the target leaves room
   int target_bounce_rounds = 0;     //!< --error with bounces: bounce passes run again with more rays ...
   int target_direct_rounds = 0;     //!< ... or after more direct vertex rays
-  uint64_t target_holdout_rays = 0;  //!< --error with bounces: the held-out samples' paths
+  uint64_t target_holdout_rays = 0;  //!< --error with bounces: rays spent measuring (the held-out samples' paths, the passes' noise)
   FitStats fit;
   double alpha = 0;  //!< the fit's regulariser weight as used (chosen, with alpha_auto)
   //! alpha_auto: each candidate α and the held-out error of its fit, in percent (empty otherwise)

@@ -79,6 +79,16 @@ RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatr
                           const RowMatrixX3d& normals, const RowMatrixX3d& offsets, const BounceOptions& options,
                           TransferStats* stats = nullptr);
 
+//! The noise of the light that `options.bounces` passes at options.rays rays per vertex would add
+//! to `direct`, before they run: the surface's mean (area-weighted over a systematic subset of at
+//! most `points` vertices, halved as interpolation spreads it, per channel), from pass 1's noise
+//! in two gathers with seeds of their own, grown by (Σ_{k<B}(ρh)^k)², h each vertex's fraction
+//! of rays that hit a front face: an estimate from above (the .cpp says why). Adds its rays to *rays.
+//! \param direct #V by N², the direct light (grey, also with options.colour)
+//! \throw InputError for options out of range or shapes that do not match, EmbreeError
+double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& direct, const BounceOptions& options, size_t points,
+                    uint64_t* rays);
+
 //! The baseline for benchmarks: one pass's rays (the same directions from the same vertices, with
 //! the same threads) through Embree's closest-hit query, with nothing done but counting hits.
 //! \return the number of rays that hit anything

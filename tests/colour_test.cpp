@@ -31,6 +31,33 @@ std::shared_ptr<const AlbedoField> constant_colour(const Mesh& mesh, const Eigen
 // A plate facing down over a ground: the ground receives the plate's light.
 Mesh plate_over_ground() { return test::build(test::merge(test::quad(2.0, 0.0, true), test::quad(1.0, 0.5, false))); }
 
+TEST(Colour, ABounceNoiseEstimateOfColourIsTheMeanOfItsChannelsGreyEstimates) {
+  // The same rays in every channel (the gathers' seeds do not depend on the albedo): the RGB
+  // estimate is the mean over channels of the grey ones at each channel's albedo, exactly.
+  const Mesh mesh = plate_over_ground();
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  TransferOptions t;
+  t.order = 3, t.rays = 64;
+  const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t);
+  const Eigen::Vector3d rho(0.9, 0.5, 0.2);
+  BounceOptions b;
+  b.bounces = 3, b.rays = 16;
+  b.colour = constant_colour(mesh, rho);
+  uint64_t rays = 0;
+  const double rgb = bounce_noise(mesh, scene, direct, b, 100, &rays);
+  double mean = 0;
+  for (int c = 0; c < 3; ++c) {
+    BounceOptions g = b;
+    g.colour = nullptr, g.albedo = rho[c];
+    mean += bounce_noise(mesh, scene, direct, g, 100, &rays) / 3;
+  }
+  EXPECT_GT(rgb, 0.0);
+  EXPECT_NEAR(rgb, mean, 1e-12 * mean);
+  b.bounces = 0;
+  EXPECT_EQ(bounce_noise(mesh, scene, direct, b, 100, &rays), 0.0);
+  EXPECT_THROW(bounce_noise(mesh, scene, direct.topRows(2), b, 100, &rays), InputError);
+}
+
 TEST(Colour, EachChannelOfAColouredBounceIsTheGreyBounceAtThatChannelsAlbedo) {
   const Mesh mesh = plate_over_ground();
   const RayScene scene(mesh.positions, position_triangles(mesh));

@@ -279,3 +279,48 @@ INSTANTIATE_TEST_SUITE_P(CornellAndHouse, ScenesBounceFit, ::testing::Values("co
 
 }  // namespace
 }  // namespace prtsub
+
+namespace prtsub {
+namespace {
+
+// bounce_noise against the truth: the passes' surface noise measured by running them twice with
+// seeds of their own (area-weighted mean of ‖Δ‖²/2 over every vertex, halved as bounce_noise
+// halves it). --error uses the estimate, made before the passes run, to choose fewer bounce rays
+// where the target leaves room, so it must not fall below the truth, and should not be far
+// above it, or it saves nothing.
+class ScenesBounceNoise : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ScenesBounceNoise, AheadOfThePassesItIsAtLeastTheirs) {
+  const std::string dir = test::shared_scenes();
+  if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
+  const Mesh m = load_mesh(dir + "/" + GetParam());
+  const RayScene scene(m.positions, position_triangles(m));
+  TransferOptions t;
+  t.order = 3, t.rays = 64, t.seed = 11;
+  const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(m), m.normals, t);
+  BounceOptions b;
+  b.bounces = 3, b.rays = 32, b.seed = 21;
+  const RowMatrixXd one = interreflected_transfer(m, scene, direct, b);
+  b.seed = 22;
+  const RowMatrixXd two = interreflected_transfer(m, scene, direct, b);
+  const std::vector<double> area = vertex_areas(m);
+  double sum = 0, weight = 0;
+  for (size_t i = 0; i < area.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    sum += area[i] * (one.row(r) - two.row(r)).squaredNorm() / 2, weight += area[i];
+  }
+  const double truth = sum / weight / 2;
+  uint64_t rays = 0;
+  const double ahead = bounce_noise(m, scene, direct, b, 2048, &rays);
+  std::printf("%s: the passes' noise %.3g; bounce_noise ahead of them %.3g (%.2f)\n", GetParam(), truth, ahead, ahead / truth);
+  EXPECT_GT(ahead, 0.9 * truth);
+  EXPECT_LT(ahead, 3.0 * truth);
+  const size_t stride = (m.num_vertices() + 2047) / 2048, picked = (m.num_vertices() + stride - 1) / stride;
+  EXPECT_EQ(rays, uint64_t(2) * 32 * picked);  // two gathers at the same vertices
+}
+
+INSTANTIATE_TEST_SUITE_P(Interiors, ScenesBounceNoise,
+                         ::testing::Values("cornell_box.obj", "house_on_site.obj", "conference.ply", "mori_knob.obj", "sibenik.obj"));
+
+}  // namespace
+}  // namespace prtsub
