@@ -28,27 +28,39 @@ std::shared_ptr<const AlbedoField> constant_colour(const Mesh& mesh, const Eigen
   return std::make_shared<const AlbedoField>(mesh, s);
 }
 
-// A plate facing down over a ground: the ground receives the plate's light.
+// A plate facing down over a ground: the ground receives the plate's light. With its scene, the
+// direct transfer at its vertices (order 3, 64 rays) and three bounces of a coloured albedo.
 Mesh plate_over_ground() { return test::build(test::merge(test::quad(2.0, 0.0, true), test::quad(1.0, 0.5, false))); }
+
+struct ColouredPlate {
+  Mesh mesh = plate_over_ground();
+  RayScene scene{mesh.positions, position_triangles(mesh)};
+  RowMatrixXd direct;
+  Eigen::Vector3d rho{0.9, 0.5, 0.2};
+  BounceOptions b;
+  explicit ColouredPlate(int rays) {
+    TransferOptions t;
+    t.order = 3, t.rays = 64;
+    direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t);
+    b.bounces = 3, b.rays = rays;
+    b.colour = constant_colour(mesh, rho);
+  }
+};
 
 TEST(Colour, ABounceNoiseEstimateOfColourIsTheMeanOfItsChannelsGreyEstimates) {
   // The same rays in every channel (the gathers' seeds do not depend on the albedo): the RGB
   // estimate is the mean over channels of the grey ones at each channel's albedo, exactly.
-  const Mesh mesh = plate_over_ground();
-  const RayScene scene(mesh.positions, position_triangles(mesh));
-  TransferOptions t;
-  t.order = 3, t.rays = 64;
-  const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t);
-  const Eigen::Vector3d rho(0.9, 0.5, 0.2);
-  BounceOptions b;
-  b.bounces = 3, b.rays = 16;
-  b.colour = constant_colour(mesh, rho);
+  ColouredPlate p(16);
+  const Mesh& mesh = p.mesh;
+  const RayScene& scene = p.scene;
+  const RowMatrixXd& direct = p.direct;
+  BounceOptions& b = p.b;
   uint64_t rays = 0;
   const double rgb = bounce_noise(mesh, scene, direct, b, 100, &rays);
   double mean = 0;
   for (int c = 0; c < 3; ++c) {
     BounceOptions g = b;
-    g.colour = nullptr, g.albedo = rho[c];
+    g.colour = nullptr, g.albedo = p.rho[c];
     mean += bounce_noise(mesh, scene, direct, g, 100, &rays) / 3;
   }
   EXPECT_GT(rgb, 0.0);
@@ -59,15 +71,12 @@ TEST(Colour, ABounceNoiseEstimateOfColourIsTheMeanOfItsChannelsGreyEstimates) {
 }
 
 TEST(Colour, EachChannelOfAColouredBounceIsTheGreyBounceAtThatChannelsAlbedo) {
-  const Mesh mesh = plate_over_ground();
-  const RayScene scene(mesh.positions, position_triangles(mesh));
-  TransferOptions t;
-  t.order = 3, t.rays = 64;
-  const RowMatrixXd direct = shadowed_transfer(scene, vertex_positions(mesh), mesh.normals, t);
-  const Eigen::Vector3d rho(0.9, 0.5, 0.2);
-  BounceOptions b;
-  b.bounces = 3, b.rays = 64;
-  b.colour = constant_colour(mesh, rho);
+  const ColouredPlate p(64);
+  const Mesh& mesh = p.mesh;
+  const RayScene& scene = p.scene;
+  const RowMatrixXd& direct = p.direct;
+  const Eigen::Vector3d& rho = p.rho;
+  const BounceOptions& b = p.b;
   RowMatrixXd before_rgb;
   const RowMatrixXd rgb = interreflected_transfer(mesh, scene, direct, b, nullptr, &before_rgb);
   const Eigen::Index K = direct.cols();
