@@ -697,11 +697,19 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
   po.order = o.transfer.order, po.paths = o.target_paths, po.bounces = r.bounce.passes, po.albedo = b.albedo, po.colour = b.colour;
   po.seed = mix64(o.transfer.seed ^ 0xB0CE5401Dull), po.threads = o.transfer.threads;  // independent of every bake ray
   if (progress.stage) progress.stage("bounced hold-out", 0);
-  TransferStats st;
-  const Holdout held = bounced_holdout(r.mesh, bounce_scene, holdout_subset(r.fit_data.plan.holdout, o.target_paths_points), po, &st);
-  r.rays += st.rays, r.target_holdout_rays += st.rays;
+  // A quarter of the points first: a loose target is told from the error at once; within three
+  // standard errors of E, the whole subset (four times the points, half the standard error).
   r.predicted_direct = r.predicted;
-  r.predicted = holdout_error(r.mesh, held, r.transfer);
+  Holdout held;
+  for (size_t points = std::max<size_t>(1, o.target_paths_points / 4);; points = o.target_paths_points) {
+    TransferStats st;
+    held = bounced_holdout(r.mesh, bounce_scene, holdout_subset(r.fit_data.plan.holdout, points), po, &st);
+    r.rays += st.rays, r.target_holdout_rays += st.rays;
+    r.predicted = holdout_error(r.mesh, held, r.transfer);
+    if (points >= o.target_paths_points || held.size() >= r.fit_data.plan.holdout.size() ||
+        std::abs(r.predicted.percent - o.target_error) > 3 * r.predicted.standard_error)
+      break;
+  }
   const std::vector<double> w = vertex_areas(r.mesh);
   double area = 0;
   for (double a : w) area += a;

@@ -104,7 +104,9 @@ struct BakeOptions {
   //! With target_error and bounces: paths per held-out sample for its bounced light
   //! (bounced_holdout), which the target then holds for
   int target_paths = 128;
-  size_t target_paths_points = 8192;  //!< ... on at most this many of the held-out samples (holdout_subset)
+  //! ... on a quarter of this many of the held-out samples first, then, when the error is within
+  //! three standard errors of the target, on this many (holdout_subset)
+  size_t target_paths_points = 8192;
   //! rays per surface sample; with the pilot and sample_rays_auto, the budget of sample rays this
   //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split among
   //! sample_ray_choices as the pilot's measurements say (choose_sample_rays: 4 where shadows cross

@@ -255,7 +255,7 @@ TEST(Bake, WithBouncesAnErrorTargetIsMeasuredOnTheBouncedAssetAndEvalAgrees) {
   EXPECT_EQ(r.bounce_rays & (r.bounce_rays - 1), 0) << r.bounce_rays;
   const RayScene scene(mesh.positions, position_triangles(mesh));
   ReferenceOptions ro;
-  ro.points = 4000, ro.rays = 1024, ro.bounces = 2, ro.paths = 1024;
+  ro.points = 2000, ro.rays = 1024, ro.bounces = 2, ro.paths = 1024;
   const Reference ref = make_reference(mesh, scene, ro);
   const EvalResult e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, r.transfer);
   // eval's RMS holds its reference's own noise; without it, the asset's error.
