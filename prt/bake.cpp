@@ -585,6 +585,15 @@ size_t add_samples(const RayScene& scene, const BakeOptions& o, int round, const
   return more.size();
 }
 
+// The vertices' variances as the surface's noise: area-weighted (w, summing to `area`), and
+// halved, as interpolation spreads a vertex's noise over its faces (∫_f h_c² = a_f/6).
+double surface_noise(const std::vector<double>& w, double area, const std::vector<double>& variance) {
+  double sum = 0;
+  for (size_t i = 0; i < w.size(); ++i)
+    if (std::isfinite(variance[i])) sum += w[i] * variance[i];
+  return sum / (2 * std::max(area, 1e-300));
+}
+
 // --error E: more vertex rays, or more samples, until the hold-out error is at most E. The
 // vertices' noise part of the squared error is N² = Σ_i w_i var_i / 2A (∫_f h_c² = a_f/6, w_i a
 // third of the area around vertex i); the rest of the measured E² is interpolation error, which
@@ -607,10 +616,7 @@ void reach_target(const RayScene& scene, const BakeOptions& o, const BakeProgres
   const int kMaxSampleRounds = 2;
   bool samples_spent = r.fit_data.plan.sampled_faces == 0;
   for (int round = 1; round <= 6 && r.predicted.percent > o.target_error; ++round) {
-    double noise2 = 0;
-    for (size_t i = 0; i < w.size(); ++i)
-      if (std::isfinite(r.point_variance[i])) noise2 += w[i] * r.point_variance[i];
-    noise2 /= 2 * std::max(area, 1e-300);
+    const double noise2 = surface_noise(w, area, r.point_variance);
     const double bias2 = std::max(0.0, std::pow(r.predicted.percent * unit, 2) - noise2);
     if (target2 <= 1.02 * bias2) {
       if (samples_spent || r.target_sample_rounds >= kMaxSampleRounds) {
@@ -714,13 +720,6 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
   double area = 0;
   for (double a : w) area += a;
   const double unit = unshadowed_norm(o.transfer.order) / 100;
-  // A vertex's variance, averaged over the surface as interpolation spreads it (reach_target's ½).
-  const auto surface_noise = [&](const std::vector<double>& v) {
-    double sum = 0;
-    for (size_t i = 0; i < w.size() && i < v.size(); ++i)
-      if (std::isfinite(v[i])) sum += w[i] * v[i];
-    return sum / (2 * std::max(area, 1e-300));
-  };
   const double V = double(r.mesh.num_vertices()), pass_cost = r.bounce.cached ? 1.0 : std::max(r.bounce.passes, 1);
   const double sample_cost = double(r.fit_data.samples.size()) * std::max(r.fit_data.sample_rays, 1);
   for (int round = 1; round <= 4 && r.predicted.percent > o.target_error; ++round) {
@@ -730,7 +729,7 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
     run.bounces = r.bounce.passes;
     const double nb = bounce_noise(r.mesh, bounce_scene, fitted, run, o.target_paths_points / 4, &noise_rays);
     r.rays += noise_rays, r.target_holdout_rays += noise_rays;
-    const double nd = surface_noise(r.point_variance);
+    const double nd = surface_noise(w, area, r.point_variance);
     const double rebounce = V * b.rays * pass_cost + (o.bounce.fit_samples ? sample_cost : 0);
     // The passes' rays: enough to remove Δ where their noise holds it, else a quadrupling.
     // bounce_noise is an estimate from above (1.2-2.3× the passes' noise, ScenesBounceNoise): the

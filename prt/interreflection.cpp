@@ -268,17 +268,11 @@ double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& 
                     uint64_t* rays) {
   check_bounce_options(bounce);
   if (static_cast<size_t>(direct.rows()) != mesh.num_vertices()) throw InputError("bounce noise: the direct transfer has the wrong number of rows");
-  const size_t V = mesh.num_vertices(), stride = std::max<size_t>(1, (V + points - 1) / std::max<size_t>(points, 1));
-  std::vector<size_t> pick;
-  for (size_t i = 0; i < V; i += stride) pick.push_back(i);
+  if (bounce.bounces == 0 || mesh.num_vertices() == 0) return 0;
+  const PilotVertices pilot = pilot_vertices(mesh, points);
+  const std::vector<size_t>& pick = pilot.index;
   const auto n = static_cast<Eigen::Index>(pick.size());
-  if (n == 0 || bounce.bounces == 0) return 0;
-  const RowMatrixX3d all_offsets = vertex_offset_directions(mesh);
-  RowMatrixX3d p(n, 3), nrm(n, 3), off(n, 3);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const auto i = static_cast<Eigen::Index>(pick[static_cast<size_t>(k)]);
-    p.row(k) = mesh.point(static_cast<uint32_t>(i)).transpose(), nrm.row(k) = mesh.normals.row(i), off.row(k) = all_offsets.row(i);
-  }
+  const RowMatrixX3d &p = pilot.points, &nrm = pilot.normals, &off = pilot.offsets;
   // Each channel's block: the direct light and a column of ones (colour scales each block by its ρ).
   const Eigen::Index K = direct.cols(), block = K + 1;
   const int channels = bounce.colour ? 3 : 1;

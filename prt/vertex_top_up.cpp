@@ -273,6 +273,20 @@ std::vector<double> vertex_areas(const Mesh& mesh) {
   return a;
 }
 
+PilotVertices pilot_vertices(const Mesh& mesh, size_t count) {
+  const size_t V = mesh.num_vertices(), stride = std::max<size_t>(1, (V + count - 1) / std::max<size_t>(count, 1));
+  PilotVertices s;
+  for (size_t i = 0; i < V; i += stride) s.index.push_back(i);
+  const auto m = static_cast<Eigen::Index>(s.index.size());
+  const RowMatrixX3d all_offsets = vertex_offset_directions(mesh), positions = vertex_positions(mesh);
+  s.points.resize(m, 3), s.normals.resize(m, 3), s.offsets.resize(m, 3);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const auto i = static_cast<Eigen::Index>(s.index[size_t(k)]);
+    s.points.row(k) = positions.row(i), s.normals.row(k) = mesh.normals.row(i), s.offsets.row(k) = all_offsets.row(i);
+  }
+  return s;
+}
+
 FirstRoundChoice choose_first_rays(const Mesh& mesh, const RayScene& scene, const TransferOptions& options, double target_noise,
                                    double unit, const std::vector<int>& choices, double after, size_t points, int pilot_rays) {
   FirstRoundChoice c;
@@ -281,19 +295,12 @@ FirstRoundChoice choose_first_rays(const Mesh& mesh, const RayScene& scene, cons
   const size_t V = mesh.num_vertices();
   c.rays = choices.back();
   if (V == 0) return c;
-  const size_t stride = std::max<size_t>(1, (V + points - 1) / std::max<size_t>(points, 1));
   const std::vector<double> w = vertex_areas(mesh);
   double area = 0;
   for (double a : w) area += a;
-  const RowMatrixX3d all_offsets = vertex_offset_directions(mesh), positions = vertex_positions(mesh);
-  std::vector<size_t> which;
-  for (size_t i = 0; i < V; i += stride) which.push_back(i);
-  const auto m = static_cast<Eigen::Index>(which.size());
-  RowMatrixX3d p(m, 3), n(m, 3), off(m, 3);
-  for (Eigen::Index k = 0; k < m; ++k) {
-    const auto i = static_cast<Eigen::Index>(which[size_t(k)]);
-    p.row(k) = positions.row(i), n.row(k) = mesh.normals.row(i), off.row(k) = all_offsets.row(i);
-  }
+  const PilotVertices pilot = pilot_vertices(mesh, points);
+  const std::vector<size_t>& which = pilot.index;
+  const RowMatrixX3d &p = pilot.points, &n = pilot.normals, &off = pilot.offsets;
   // The surface noise at the pilot's count and at half of it, from the estimator's two halves:
   // rank-1 lattices' error falls faster than 1/√R (bunny's point values: 0.58 a doubling), so the
   // decay is measured, not assumed.

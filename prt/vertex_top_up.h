@@ -52,6 +52,14 @@ std::vector<double> smoothed_variance(const Mesh& mesh, const std::vector<double
 //! A third of the area of the faces around each vertex: the weights for a surface error.
 std::vector<double> vertex_areas(const Mesh& mesh);
 
+//! A pilot of vertices: every ⌈V / count⌉-th render vertex (a systematic subset, spread over the
+//! mesh as its vertices are), with its position, normal and ray-offset direction.
+struct PilotVertices {
+  std::vector<size_t> index;
+  RowMatrixX3d points, normals, offsets;
+};
+PilotVertices pilot_vertices(const Mesh& mesh, size_t count);
+
 //! The first round's rays an error target asks for (--error without --rays).
 struct FirstRoundChoice {
   int rays = 0;                      //!< chosen: the least of the choices whose noise is within the target
