@@ -210,6 +210,7 @@ int cmd_bake(int argc, char** argv) {
   args.flag("--compress", "glTF: EXT_meshopt_compression (required by the file; most engines and three.js decode it)", &gltf.compress);
   cli.add_refinement(args);
   cli.add_fit(args);
+  cli.add_basis(args);
   std::string stage = "all", shard, parts;
   int phase = 0;
   bool print_phases = false;
@@ -357,6 +358,8 @@ Report inspect_record(const std::string& input, const Asset& a) {
   r.set("signal", ao ? "ao" : "transfer");
   r.set("order", a.order);
   r.set("coefficients", sh_count(a.order));
+  r.set("lobes", static_cast<int64_t>(a.sg.cols()));
+  r.set("basis", a.sg.cols() > 0 ? "sg:" + std::to_string(a.sg.cols()) : std::string("sh"));
   r.set("channels", a.channels);
   r.set("channels_text", a.channels == 3 ? ", per channel: RGB transfer" : "");
   r.set("albedo", a.albedo.rows() > 0 ? "; albedo per vertex (albedo_r/g/b)" : "");
@@ -389,18 +392,21 @@ int cmd_inspect(int argc, char** argv) {
   const Asset a = read_asset(input);  // throws on NaN/Inf, bad sizes or indices
   const Report r = inspect_record(input, a);
   const bool ao = a.signal == AssetSignal::Ao;
+  const bool lobes = a.sg.cols() > 0;
   r.print(stdout, {"prtsub inspect: {input}", "  vertices:   {vertices}", "  triangles:  {triangles}",
-                   ao ? "  signal:     ambient occlusion, one ao per vertex, from {ao_min:4} to {ao_max:4} (mean {ao_mean:4})"
-                      : "  sh order:   {order} ({coefficients} coefficients per vertex{channels_text}){albedo}"});
+                   ao      ? "  signal:     ambient occlusion, one ao per vertex, from {ao_min:4} to {ao_max:4} (mean {ao_mean:4})"
+                   : lobes ? "  basis:      {lobes} spherical-Gaussian lobes per vertex, relit through SH order {order} (exact for its lights)"
+                           : "  sh order:   {order} ({coefficients} coefficients per vertex{channels_text}){albedo}"});
   for (const auto& [k, v] : a.metadata) std::printf("  meta:       %s %s\n", k.c_str(), v.c_str());
   r.print(stdout, {"  checks:     finite values, indices in range, {normals_not_unit} of {vertices} normals not unit length"});
   if (!ao) {
-    std::printf("  energy by band (sum over vertices of squared coefficients):\n");
+    std::printf(lobes ? "  energy by band of the lobes' SH equivalent (sum over vertices of squared coefficients):\n"
+                      : "  energy by band (sum over vertices of squared coefficients):\n");
     for (int l = 0; l < a.order; ++l) {
       const std::string b = std::to_string(l);
       std::printf("%s\n", r.format("    l=" + b + "  {energy_fraction_band_" + b + ":%3}  cumulative {energy_cumulative_band_" + b + ":%3}").c_str());
     }
-    const bool lower = r.number("order_99_percent_energy") < a.order;
+    const bool lower = r.number("order_99_percent_energy") < a.order && !lobes;
     std::printf("%s\n", r.format(std::string("  order holding 99% of the energy: {order_99_percent_energy}") +
                                  (lower ? " (a lower --order would do for this scene)" : "")).c_str());
   }
@@ -444,6 +450,7 @@ int cmd_diff(int argc, char** argv) {
   r.set("pixels", e.pixels);
   r.set("rmse_relative", e.rmse_relative);
   r.set("rmse_percent", 100 * e.rmse_relative);
+  r.set("rmse_rms_relative", e.rmse_rms_relative);  // of the reference's RMS: for lights that shade negative
   r.set("psnr_db", e.psnr_db);
   r.print(stdout, {"prtsub diff: {a} against {b}", "  pixels:     {pixels} covered in both",
                    "  rmse:       {rmse_percent:4}% of the reference's mean", "  psnr:       {psnr_db:2} dB"});

@@ -5,6 +5,7 @@
 
 #include "cli/specs.h"
 #include "cli/images.h"
+#include "prtsub/prt/sg_basis.h"
 #include "prtsub/prt/sh.h"
 
 namespace prtsub {
@@ -173,8 +174,26 @@ void BakeCli::add_refinement(ArgParser& args) {
               {UniformScheme::Linear, UniformScheme::Loop}, uniform_scheme_name);
 }
 
+void BakeCli::add_basis(ArgParser& args) {
+  args.option("--basis", "sh|sg:N", "the transfer's basis: SH of --order, or N spherical-Gaussian lobes (4 to 16; 9 and 12 are\n"
+              "the usual; each vertex's own least-squares encoding, non-negative; docs/sh_convention.md) [default sh]", &basis_);
+  args.flag("--sg-signed", "--basis sg: let lobe coefficients go negative (lower error; a narrow light can then shade negative)",
+            &bake.sg_signed);
+  args.when_given("--fit", [this] { fit_given_ = true; });
+}
+
 BakeOptions BakeCli::options() const {
   BakeOptions o = bake;
+  if (!basis_.empty() && basis_ != "sh") {
+    char* end = nullptr;
+    const long n = basis_.rfind("sg:", 0) == 0 ? std::strtol(basis_.c_str() + 3, &end, 10) : 0;
+    if (!end || end == basis_.c_str() + 3 || *end != '\0' || n < kMinSgLobes || n > kMaxSgAssetLobes)
+      throw UsageError("--basis: expected sh or sg:N with N from " + std::to_string(kMinSgLobes) + " to " + std::to_string(kMaxSgAssetLobes) +
+                       ", got '" + basis_ + "'");
+    o.sg_lobes = static_cast<int>(n);
+    if (!fit_given_) o.fit.method = FitMethod::Point;  // the lobes are each vertex's own encoding
+  }
+  if (o.sg_signed && o.sg_lobes == 0) throw UsageError("--sg-signed: only with --basis sg:N");
   if (bounces_ == "auto") {
     o.bounce.until_converged = true, o.bounce.bounces = 16;
   } else if (!bounces_.empty()) {

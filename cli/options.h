@@ -39,6 +39,8 @@ struct BakeCli {
   void add_fit(ArgParser& args);
   //! --refine and the options of adaptive and uniform refinement.
   void add_refinement(ArgParser& args);
+  //! --basis and --sg-signed (bake alone: the other commands compare SH fits).
+  void add_basis(ArgParser& args);
   //! The options after parsing: checks them (\throw UsageError naming the option) and fills in
   //! what derives from others (the source name).
   BakeOptions options() const;
@@ -52,6 +54,8 @@ struct BakeCli {
   std::string albedo_, albedo_map_;  // --albedo A|R,G,B|vertex, --albedo-map PATH
   std::string alpha_ = "auto";       // --alpha A|auto
   std::string order_;    // --order N|auto
+  std::string basis_;    // --basis sh|sg:N
+  bool fit_given_ = false;  // --fit: else an SG bake's values are its vertices' own (point)
   std::vector<std::string> order_lights_;  // --order-light SPEC
 };
 

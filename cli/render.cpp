@@ -20,6 +20,7 @@ struct RenderCli {
   double albedo = -1, exposure = 1.0;  // albedo < 0: the asset's (its per-vertex albedo, or 0.8)
   bool reference = false, compare_bare = false;
   int reference_order = 0;  // 0: the asset's
+  int light_order = 0;      // Gouraud: 0, the asset's
   TransferOptions transfer;  // the reference's rays, seed and threads; the order is the asset's
 };
 
@@ -87,6 +88,8 @@ int cmd_render(int argc, char** argv) {
   args.flag("--reference", "render the per-pixel reference instead of the Gouraud frame", &c.reference);
   args.option("--reference-order", "N", "the reference's SH order (and the light's), to see what the asset's order leaves out\n"
               "[default the asset's]", &c.reference_order, 0, kMaxShOrder);
+  args.option("--light-order", "N", "Gouraud: the light's SH order, the asset seeing the bands it has, so that assets of\n"
+              "different orders see one light (random lights differ by order) [default the asset's]", &c.light_order, 0, kMaxShOrder);
   add_transfer_options(args, c.transfer, false);
   args.flag("--compare-bare", "reference: also time a bare Embree loop over the same rays (report: bare_rays_per_second)", &c.compare_bare);
   add_report_option(args, c.report);
@@ -106,7 +109,8 @@ int cmd_render(int argc, char** argv) {
   const Asset asset = read_asset(c.input);
   r.set("seconds_load", clock.lap());
   if (c.reference_order > 0 && !c.reference) throw UsageError("render: --reference-order needs --reference");
-  ShLight light = parse_lights(c.lights, c.reference_order > 0 ? c.reference_order : asset.order);
+  if (c.light_order > 0 && c.reference) throw UsageError("render: --light-order is for Gouraud frames; the reference's is --reference-order");
+  ShLight light = parse_lights(c.lights, c.reference_order > 0 ? c.reference_order : c.light_order > 0 ? c.light_order : asset.order);
   for (const Eigen::Matrix3d& rotation : rotations) light = rotate_light(light, rotation);
   const Camera camera = c.camera == "auto" ? auto_camera(bounds(asset.positions), width, height) : given_camera;
   r.set("seconds_light", clock.lap());

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 
+#include "prtsub/prt/sg_basis.h"
 #include "prtsub/prt/sh.h"
 
 namespace prtsub {
@@ -149,9 +150,14 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
 
 void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   const Mesh& mesh = res.mesh;
-  const int order = o.signal == AssetSignal::Ao ? 1 : res.order.order > 0 ? res.order.order : o.transfer.order;
+  const int order = o.signal == AssetSignal::Ao ? 1
+                    : o.sg_lobes > 0        ? sg_shading_order(sg_basis(o.sg_lobes))
+                    : res.order.order > 0   ? res.order.order
+                                            : o.transfer.order;
   r.set("order", order);
-  r.set("coefficients", sh_count(order));
+  r.set("coefficients", o.sg_lobes > 0 ? o.sg_lobes : sh_count(order));
+  r.set("basis", o.sg_lobes > 0 ? "sg:" + std::to_string(o.sg_lobes) : std::string("sh"));
+  if (o.sg_lobes > 0) r.set("sg_encoding", o.sg_signed ? "signed" : "non-negative");
   r.set("order_auto", res.order.order > 0);
   if (res.order.order > 0) {
     const OrderChoice& c = res.order;
@@ -176,7 +182,8 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("order_why", c.reached ? (o.order_choice.tolerance_percent > 0 ? "within --order-tolerance" : "below the bake's own noise at that order")
                                  : "not known at --max-order, and no lower order got below its tolerance");
   }
-  r.set("rays_per_vertex", o.transfer.rays);
+  // --error without --rays: the first round's count it chose (o.transfer.rays is the flag's default)
+  r.set("rays_per_vertex", res.first_round.rays > 0 ? res.first_round.rays : o.transfer.rays);
   r.set("seed", o.transfer.seed);
   r.set("estimator", estimator_name(o.transfer.estimator));
   r.set("crease_angle", mesh.crease_angle_deg);
@@ -340,6 +347,9 @@ void print_bake_summary(const Report& r) {
   if (ao)
     r.print(stdout, {"  signal:     ambient occlusion, {rays_per_vertex} rays per vertex, seed {seed}; {clamped_values} values "
                      "clamped into [0, 1]"});
+  else if (r.format("{basis}") != "sh")
+    r.print(stdout, {"  transfer:   {coefficients} spherical-Gaussian lobes ({sg_encoding}, relit through order {order}), "
+                     "{rays_per_vertex} rays per vertex, seed {seed}"});
   else
     r.print(stdout, {"  transfer:   order {order} ({coefficients} coefficients), {rays_per_vertex} rays per vertex, seed {seed}"});
   if (r.format("{early_stop}") == "yes")

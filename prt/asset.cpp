@@ -118,8 +118,18 @@ AssetBounces asset_bounces(const Asset& asset, const std::string& path) {
   return b;
 }
 
+// An SG asset's values: kept as the file has them, and relit through their SH equivalent.
+void set_asset_lobes(Asset& a, const RowMatrixXd& lobes) {
+  const SgBasis basis = sg_basis(static_cast<int>(lobes.cols()));
+  a.sg = lobes;
+  a.order = sg_shading_order(basis);
+  a.transfer = sg_to_sh(basis, lobes, a.order);
+  a.channels = 1;
+}
+
 Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& metadata, AssetSignal signal, const RowMatrixX3d& albedo) {
-  check_asset_input("(in memory)", mesh, transfer, signal, albedo);
+  const int lobes = metadata_lobes(metadata, "(in memory)");
+  check_asset_input("(in memory)", mesh, transfer, signal, albedo, lobes);
   Asset a;
   a.positions = vertex_positions(mesh);
   a.normals = mesh.normals;
@@ -130,10 +140,49 @@ Asset make_asset(const Mesh& mesh, const RowMatrixXd& transfer, const Metadata& 
   a.metadata = metadata;
   a.signal = signal;
   a.albedo = albedo;
+  if (lobes > 0) {
+    set_asset_lobes(a, transfer);
+    return a;
+  }
   a.channels = signal == AssetSignal::Ao ? 1 : transfer_channels(transfer.cols());
   a.order = signal == AssetSignal::Ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(transfer.cols() / a.channels))));
   return a;
 }
+
+Metadata sg_convention_metadata(const SgBasis& basis, bool non_negative) {
+  char buf[64];
+  std::string axes;
+  for (const Eigen::Vector3d& mu : basis.axes) {
+    std::snprintf(buf, sizeof buf, "%s%.9f,%.9f,%.9f", axes.empty() ? "" : " ", mu.x(), mu.y(), mu.z());
+    axes += buf;
+  }
+  std::snprintf(buf, sizeof buf, "%.17g", basis.sharpness);
+  return {
+      {"prtsub_asset", "1"},
+      {"basis", "spherical-gaussian G_k(w)=exp(sharpness*(mu_k.w-1)) axes=mesh mu_k=spherical-fibonacci z=1-(2k+1)/N phi=k*pi*(3-sqrt(5)) "
+                "sharpness=ln2/(1-cos(sqrt(4pi/N)/2))"},
+      {"sg_lobes", std::to_string(basis.size())},
+      {"sg_sharpness", buf},
+      {"sg_axes", axes},
+      {"transfer", std::string("V*max(n.w,0)~sum(c_k*G_k(w)) least-squares") + (non_negative ? " c_k>=0" : " signed") +
+                       " radiance=albedo/pi*sum(c_k*L_k) L_k=integral(L*G_k)"},
+  };
+}
+
+int metadata_lobes(const Metadata& metadata, const std::string& path) {
+  for (const auto& [key, value] : metadata) {
+    if (key != "sg_lobes") continue;
+    char* end = nullptr;
+    const long n = std::strtol(value.c_str(), &end, 10);
+    if (end == value.c_str() || *end != '\0' || n < kMinSgLobes || n > kMaxSgAssetLobes)
+      throw InputError(path + ": metadata 'sg_lobes " + value + "' is not a lobe count of " + std::to_string(kMinSgLobes) + " to " +
+                       std::to_string(kMaxSgAssetLobes));
+    return static_cast<int>(n);
+  }
+  return 0;
+}
+
+const RowMatrixXd& stored_values(const Asset& a) { return a.sg.rows() > 0 ? a.sg : a.transfer; }
 
 Metadata sh_convention_metadata(int order) {
   return {
@@ -152,10 +201,14 @@ Metadata ao_metadata() {
   };
 }
 
-void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal, const RowMatrixX3d& albedo) {
+void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal, const RowMatrixX3d& albedo,
+                       int lobes) {
+  if (lobes > 0 && (signal != AssetSignal::Transfer || transfer.cols() != lobes))
+    throw InputError(path + ": a spherical-Gaussian asset takes " + std::to_string(lobes) + " grey transfer values per vertex, got " +
+                     std::to_string(transfer.cols()));
   if (signal == AssetSignal::Ao && transfer.cols() != 1)
     throw InputError(path + ": an AO asset takes one value per vertex, got " + std::to_string(transfer.cols()));
-  if (signal == AssetSignal::Transfer && transfer_channels(transfer.cols()) == 0)
+  if (signal == AssetSignal::Transfer && lobes == 0 && transfer_channels(transfer.cols()) == 0)
     throw InputError(path + ": " + std::to_string(transfer.cols()) + " transfer values per vertex is neither N² nor 3·N² for an order N of 1 to 10");
   if (albedo.rows() > 0 && static_cast<size_t>(albedo.rows()) != mesh.num_vertices())
     throw InputError(path + ": " + std::to_string(albedo.rows()) + " albedos for " + std::to_string(mesh.num_vertices()) + " vertices");
@@ -185,7 +238,8 @@ void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatri
 
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
                  const Metadata& metadata, AssetSignal signal, const RowMatrixX3d& albedo) {
-  check_asset_input(path, mesh, transfer_in, signal, albedo);
+  const int lobes = metadata_lobes(metadata, path);
+  check_asset_input(path, mesh, transfer_in, signal, albedo, lobes);
   const RowMatrixXd transfer = signal == AssetSignal::Ao ? RowMatrixXd(transfer_in * kAoPerT0) : transfer_in;
   const size_t V = mesh.num_vertices(), F = mesh.num_faces();
   const Eigen::Index K = transfer.cols();
@@ -204,7 +258,7 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   for (const char* p : {"x", "y", "z", "nx", "ny", "nz"}) out += std::string("property float ") + p + "\n";
   if (uv) out += "property float u\nproperty float v\n";
   if (albedo.rows() > 0) out += "property float albedo_r\nproperty float albedo_g\nproperty float albedo_b\n";
-  const int channels = signal == AssetSignal::Ao ? 1 : transfer_channels(K);
+  const int channels = signal == AssetSignal::Ao || lobes > 0 ? 1 : transfer_channels(K);
   if (signal == AssetSignal::Ao) out += "property float ao\n";
   else
     for (Eigen::Index c = 0; c < K; ++c) out += "property float " + transfer_property(channels, K / channels, c) + "\n";
@@ -227,6 +281,23 @@ void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& t
   }
   write_file_atomically(path, out);
 }
+
+namespace {
+
+// The lobes a file names must be the ones sg_basis builds: a consumer relights with its own.
+void check_sg_metadata(const Metadata& metadata, const SgBasis& basis, const std::string& path) {
+  for (const auto& [key, value] : metadata)
+    if (key == "sg_sharpness") {
+      const double s = std::strtod(value.c_str(), nullptr);
+      if (!(std::abs(s - basis.sharpness) <= 1e-9 * basis.sharpness))
+        throw InputError(path + ": metadata 'sg_sharpness " + value + "' is not the sharpness of prtsub's " + std::to_string(basis.size()) +
+                         " lobes");
+      return;
+    }
+  throw InputError(path + ": a spherical-Gaussian asset without an 'sg_sharpness' line");
+}
+
+}  // namespace
 
 Asset read_asset(const std::string& path) { return parse_asset(read_file_bytes(path), path); }
 
@@ -298,6 +369,21 @@ Asset parse_asset(const std::string& bytes, const std::string& path) {
     a.transfer.resize(V, 1);
     const auto& col = *v->scalar("ao");
     for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, 0) = col[static_cast<size_t>(i)] / kAoPerT0;
+    K = -1;  // read
+  }
+  const int lobes = metadata_lobes(a.metadata, path);
+  if (lobes > 0) {
+    if (K != lobes)
+      throw InputError(path + ": metadata says " + std::to_string(lobes) + " spherical-Gaussian lobes, but vertices hold " + std::to_string(K) +
+                       " transfer values");
+    check_sg_metadata(a.metadata, sg_basis(lobes), path);
+    RowMatrixXd c(V, K);
+    for (int k = 0; k < K; ++k) {
+      const auto& col = *v->scalar("t" + std::to_string(k));
+      for (Eigen::Index i = 0; i < V; ++i) c(i, k) = col[static_cast<size_t>(i)];
+    }
+    if (!c.allFinite()) throw InputError(path + ": a lobe coefficient holds NaN or Inf");
+    set_asset_lobes(a, c);
     K = -1;  // read
   }
   if (K >= 0) {

@@ -8,6 +8,7 @@
 
 #include "prtsub/prt/albedo.h"
 #include "prtsub/prt/output_file.h"
+#include "prtsub/prt/sg_basis.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/mesh.h"
 
@@ -29,12 +30,18 @@ struct Asset {
   RowMatrixX3d positions;             //!< #V by 3
   RowMatrixX3d normals;               //!< #V by 3
   RowMatrixX2d uv;                    //!< #V by 2, or no rows when the asset has none
-  RowMatrixXd transfer;               //!< #V by N², or #V by 3·N² (channels 3: red, green, blue blocks)
+  //! #V by N², or #V by 3·N² (channels 3: red, green, blue blocks). For a spherical-Gaussian
+  //! asset, the lobes' SH equivalent at `order` (sg_to_sh): exact for every light of that order,
+  //! so every SH consumer relights it as it is
+  RowMatrixXd transfer;
+  //! A spherical-Gaussian asset's own values (metadata `sg_lobes`): #V by lobes, c_k of
+  //! T(ω) ≈ Σ c_k G_k(ω) over sg_basis(lobes); no rows for SH. What the file stores.
+  RowMatrixXd sg;
   RowMatrixX3d albedo;                //!< #V by 3 linear albedo, or no rows (a grey bake records none)
   std::vector<Triangle> triangles;    //!< #F
   std::vector<uint32_t> source_face;  //!< #F
   Metadata metadata;                  //!< "key value" comment lines, in order
-  int order = 0;                      //!< 1 for AO assets
+  int order = 0;                      //!< 1 for AO assets; sg_shading_order for SG assets
   int channels = 1;                   //!< 3: RGB transfer (a coloured albedo that bounced)
   AssetSignal signal = AssetSignal::Transfer;  //!< ao assets are read into transfer as t0 = ao / kAoPerT0
 };
@@ -55,18 +62,35 @@ size_t clamp_ao(RowMatrixXd& t0);
 //! The comment lines stating the SH convention, written into every transfer asset.
 Metadata sh_convention_metadata(int order);
 
+//! The comment lines of a spherical-Gaussian transfer asset (docs/sh_convention.md, "Spherical
+//! Gaussians"): the lobe count, sharpness and axes, how the values were encoded, how they relight.
+Metadata sg_convention_metadata(const SgBasis& basis, bool non_negative);
+
+//! The lobe count a metadata's `sg_lobes` line gives, or 0 (SH) without one.
+//! \throw InputError naming `path` unless it is a count of kMinSgLobes to kMaxSgAssetLobes
+int metadata_lobes(const Metadata& metadata, const std::string& path);
+
+//! Makes `a` a spherical-Gaussian asset of these lobe coefficients (#V by N, N a lobe count
+//! metadata_lobes accepts): sg, order (sg_shading_order) and transfer (their SH equivalent).
+void set_asset_lobes(Asset& a, const RowMatrixXd& lobes);
+
+//! The values as the file stores them: the lobes of an SG asset, else the transfer.
+const RowMatrixXd& stored_values(const Asset& asset);
+
 //! The comment lines of an AO asset: what ao means.
 Metadata ao_metadata();
 
 //! The checks every asset writer makes before writing anything: the transfer's shape, finite
-//! values that fit in float, UVs for every vertex. \throw InputError naming `path`
+//! values that fit in float, UVs for every vertex; with lobes > 0, #V by lobes grey transfer.
+//! \throw InputError naming `path`
 void check_asset_input(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer, AssetSignal signal,
-                       const RowMatrixX3d& albedo = RowMatrixX3d());
+                       const RowMatrixX3d& albedo = RowMatrixX3d(), int lobes = 0);
 
 //! Writes mesh + transfer to `path` through a temporary file renamed into place, so a failed
 //! run leaves nothing behind.
 //! \param transfer #V by N², V = mesh.num_vertices(), or #V by 3·N² for RGB transfer (written as
-//!        r_t*, g_t*, b_t*); for AO #V by 1 order-1 transfer, written as the property ao = t0 · kAoPerT0
+//!        r_t*, g_t*, b_t*); for AO #V by 1 order-1 transfer, written as the property ao = t0 · kAoPerT0;
+//!        when metadata has `sg_lobes` N (sg_convention_metadata), #V by N lobe coefficients
 //! \param albedo #V by 3 linear albedo in [0, 1], written as albedo_r, albedo_g, albedo_b; or no rows
 //! \throw InputError if transfer holds NaN/Inf or has the wrong shape, IoError if writing fails
 void write_asset(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer,

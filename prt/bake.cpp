@@ -11,6 +11,7 @@
 // a bake is a function of its options and the mesh, not of threads or batching.
 #include "prtsub/prt/bake.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "prtsub/prt/ray_scene.h"
 #include "prtsub/subdiv/random.h"
 #include "prtsub/prt/sampling.h"
+#include "prtsub/prt/sg_basis.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/trace_log.h"
 #include "prtsub/prt/vertex_top_up.h"
@@ -51,6 +53,30 @@ const char* refinement_name(Refinement r) {
 
 bool early_stop_on(const BakeOptions& o) { return o.round_rays > 0 && o.transfer.rays > o.round_rays; }
 
+namespace {
+
+// What a spherical-Gaussian bake takes: the vertices' own lobes (BakeOptions::sg_lobes).
+void check_lobe_options(const BakeOptions& o) {
+  const std::string sg = "--basis sg:" + std::to_string(o.sg_lobes) + ": ";
+  if (o.sg_lobes < kMinSgLobes || o.sg_lobes > kMaxSgAssetLobes)
+    throw InputError("spherical Gaussians: an asset takes " + std::to_string(kMinSgLobes) + " to " + std::to_string(kMaxSgAssetLobes) +
+                     " lobes, got " + std::to_string(o.sg_lobes));
+  const char* refused = o.signal != AssetSignal::Transfer          ? "lobes are transfer, not ambient occlusion"
+                        : o.fit.method != FitMethod::Point         ? "the vertices' own lobes only (--fit point); the fit is SH's"
+                        : o.bounce.bounces > 0                     ? "interreflection is SH's"
+                        : o.albedo_colour.coloured()               ? "a coloured albedo is SH's (it only matters with bounces)"
+                        : o.target_error > 0                       ? "--error is SH's (its hold-out is measured in SH)"
+                        : o.order_auto                             ? "--order auto chooses an SH order"
+                        : early_stop_on(o)                         ? "early stop is SH's (use --rays-fixed)"
+                        : o.transfer.log != nullptr                ? "a sharded bake is SH's"
+                        : o.refine == Refinement::Auto             ? "--refine auto is SH's (its simplification ranks collapses in SH)"
+                        : o.transfer.first_ray != 0                ? "a single round of rays"
+                                                                   : nullptr;
+  if (refused) throw InputError(sg + refused);
+}
+
+}  // namespace
+
 void check_bake_options(const BakeOptions& o) {
   check_transfer_options(o.transfer);
   if (o.round_rays != 0 && (o.round_rays < 2 || o.round_rays % 2 != 0 || o.round_rays > (1 << 20)))
@@ -80,6 +106,7 @@ void check_bake_options(const BakeOptions& o) {
     throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.fit.alpha));
   if (!(o.simplified_alpha >= 0) || !std::isfinite(o.simplified_alpha))
     throw InputError("fit: the simplified mesh's alpha must be finite and non-negative, got " + std::to_string(o.simplified_alpha));
+  if (o.sg_lobes != 0) check_lobe_options(o);
 }
 
 void check_fixed_mesh(const BakeOptions& o) {
@@ -178,7 +205,9 @@ std::string estimator_description(const TransferOptions& t) {
 }
 
 Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
-  Metadata m = o.signal == AssetSignal::Ao ? ao_metadata() : sh_convention_metadata(o.transfer.order);
+  Metadata m = o.signal == AssetSignal::Ao ? ao_metadata()
+               : o.sg_lobes > 0            ? sg_convention_metadata(sg_basis(o.sg_lobes), !o.sg_signed)
+                                           : sh_convention_metadata(o.transfer.order);
   m.push_back({"source", o.source.empty() ? "(in memory)" : o.source});
   m.push_back({"rays", std::to_string(o.transfer.rays)});
   if (early_stop_on(o)) {
@@ -191,7 +220,9 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   m.push_back({"threads", std::to_string(o.transfer.threads) + " (results do not depend on it)"});
   m.push_back({"crease_angle", std::to_string(r.mesh.crease_angle_deg)});
   m.push_back({"normals", r.mesh.normals_from_file ? "file" : "computed"});
-  m.push_back({"estimator", estimator_description(o.transfer)});
+  TransferOptions estimator = o.transfer;
+  if (o.sg_lobes > 0) estimator.estimator = TransferEstimator::Progressive;  // sg_transfer's, whatever --estimator says
+  m.push_back({"estimator", estimator_description(estimator)});
   if (o.order_auto && r.order.order > 0) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "%d (what it leaves out, %.3f%% of ||t_unshadowed||, %s %.3f%%%s; pilot of %zu vertices to order %d)",
@@ -295,6 +326,45 @@ void refine_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& 
   for (size_t i = before; i < r.mesh.num_vertices() && i < signal.variance().size(); ++i)
     r.point_variance[i] = signal.variance()[i], r.vertex_rays[i] = o.transfer.rays;
   if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
+}
+
+// Spherical-Gaussian lobes (BakeOptions::sg_lobes): each vertex's own encoding, then adaptive
+// refinement keyed on the lobes' L² distance. Refinement compares rows by Euclidean distance; the
+// lobes overlap, so the rows are whitened by the Cholesky factor of their Gram matrix for it
+// (c L, G = L Lᵀ: ‖Δc L‖² = Δcᵀ G Δc = ∫ (ΔT)²) and turned back after. SH rows need no such step:
+// the SH are orthonormal.
+void bake_lobes(const RayScene& scene, const RowMatrixX3d& offsets, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock,
+                BakeResult& r) {
+  const SgBasis basis = sg_basis(o.sg_lobes);
+  TransferOptions t = o.transfer;
+  t.progressive.non_negative = !o.sg_signed;
+  const size_t V = r.mesh.num_vertices();
+  if (progress.stage) progress.stage("transfer", V);
+  r.transfer = sg_transfer(scene, vertex_positions(r.mesh), r.mesh.normals, basis, t, &offsets, progress.add);
+  r.rays += uint64_t(V) * uint64_t(t.rays);
+  r.vertex_rays.assign(V, t.rays);
+  r.point_variance.assign(V, NAN);  // one encoding per vertex: no halves to tell its noise
+  r.seconds_transfer = clock.lap();
+  if (o.refine == Refinement::Adaptive) {
+    if (o.adaptive.budget < r.mesh.num_faces())
+      throw InputError("--basis sg:" + std::to_string(o.sg_lobes) + ": a budget below the input's " + std::to_string(r.mesh.num_faces()) +
+                       " triangles simplifies, and simplification ranks collapses in SH");
+    const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(sg_gram(basis)).matrixL();
+    TransferSignalOptions so;
+    so.estimate = o.estimate, so.transfer = t, so.lobes = &basis, so.lobe_metric = L;
+    TransferSignal signal(scene, so);
+    RowMatrixXd whitened = r.transfer * L;
+    r.refine = refine_adaptive(r.mesh, whitened, signal, o.adaptive);
+    r.transfer = L.transpose().triangularView<Eigen::Upper>().solve(whitened.transpose()).transpose();
+    if (!o.sg_signed) r.transfer = r.transfer.cwiseMax(0.0);  // the round trip's last bits
+    r.rays += signal.rays();
+    r.vertex_rays.resize(r.mesh.num_vertices(), t.rays);
+    r.point_variance.resize(r.mesh.num_vertices(), NAN);
+    if (!r.refine.warning.empty()) r.warnings.push_back(r.refine.warning);
+    r.seconds_refine = clock.lap();
+  }
+  r.point = r.transfer;
+  r.point_halves = RowMatrixXd::Constant(Eigen::Index(r.mesh.num_vertices()), r.transfer.cols(), NAN);
 }
 
 // Refinement keyed on bounced light: each new vertex is traced for its direct transfer (the
@@ -906,6 +976,12 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   r.seconds_scene = clock.lap();
   TransferStats stats;
   const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
+  if (o.sg_lobes > 0) {
+    bake_lobes(scene, offsets, o, progress, clock, r);
+    r.seconds_total = clock.total();
+    r.metadata = bake_metadata(o, r);
+    return r;
+  }
   if (o.order_auto) {
     // Before anything is traced: every later stage (and every shard) runs at the chosen order.
     if (progress.stage) progress.stage("order", 0);

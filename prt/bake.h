@@ -61,6 +61,15 @@ struct BakeOptions {
   bool order_auto = false;
   OrderChoiceOptions order_choice;
   AssetSignal signal = AssetSignal::Transfer;  //!< Ao: order-1 transfer, written as ambient occlusion
+  //! --basis sg:N: when > 0, transfer as this many spherical-Gaussian lobes (sg_basis.h; 4 to
+  //! kMaxSgAssetLobes) in place of SH of transfer.order. Each vertex's lobes are encoded from its
+  //! transfer.rays rays by sg_transfer (the progressive least-squares encoder, transfer.progressive),
+  //! non-negative unless sg_signed. Refinement (none, uniform, adaptive above the input's count)
+  //! keys on the lobes' L² distance on the sphere, as it does on SH's. The values are the vertices'
+  //! own (fit point): the fit, bounces, a coloured albedo, --error, --order auto, early stop and
+  //! shards are SH's alone (check_bake_options says so).
+  int sg_lobes = 0;
+  bool sg_signed = false;
   Refinement refine = Refinement::None;
   RefineOptions adaptive;                      //!< Adaptive: budget (required), batch, max_edge
   //! Adaptive with a budget below the input's: the metric and the guards (its budget and value

@@ -71,6 +71,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s << "simplify " << simplify_metric_name(q.metric) << " " << q.geometry_weight << " " << q.min_angle_deg << " " << q.feature_tolerance << " "
     << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << "\n";
   s << "stage " << (o.refine_only ? "refine" : "all") << "\n";
+  s << "basis " << (o.sg_lobes > 0 ? "sg " + std::to_string(o.sg_lobes) + (o.sg_signed ? " signed" : " non-negative") : std::string("sh")) << "\n";
   s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << " " << o.bounce.fit_samples << " rekey " << o.rekey_share << "\n";
   if (o.albedo_colour.coloured()) {  // a map is named and its bytes hashed: an edited texture bakes again
     s << "albedo " << albedo_description(o.albedo_colour);

@@ -25,6 +25,7 @@
 
 #include "prtsub/prt/base64.h"
 #include "prtsub/prt/lights.h"
+#include "prtsub/prt/sg_basis.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/ply.h"
@@ -107,20 +108,22 @@ Eigen::Matrix3d z_up_to_y_up() {
 
 std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const RowMatrixXd& transfer_in,
                              const Metadata& metadata, AssetSignal signal, const GltfOptions& options, const RowMatrixX3d& albedo) {
-  check_asset_input(path, mesh, transfer_in, signal, albedo);
+  const int lobes = metadata_lobes(metadata, path);
+  check_asset_input(path, mesh, transfer_in, signal, albedo, lobes);
   const bool ao = signal == AssetSignal::Ao;
   const size_t V = mesh.num_vertices(), F = mesh.num_faces();
   const Eigen::Index K = transfer_in.cols();
-  const int channels = ao ? 1 : transfer_channels(K);
+  const int channels = ao || lobes > 0 ? 1 : transfer_channels(K);
   const Eigen::Index per_channel = K / channels;
-  const int order = ao ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(per_channel))));
+  const int order = ao || lobes > 0 ? 1 : static_cast<int>(std::lround(std::sqrt(static_cast<double>(per_channel))));
 
   // The file's axes: a Z-up source turns so its +Z is glTF's +Y, the transfer with it.
   const Eigen::Matrix3d R = options.up == UpAxis::Z ? z_up_to_y_up() : Eigen::Matrix3d::Identity();
   RowMatrixX3d positions = vertex_positions(mesh) * R.transpose();
   RowMatrixX3d normals = mesh.normals * R.transpose();
   RowMatrixXd transfer = transfer_in;
-  if (!ao && options.up != UpAxis::Y)
+  // Lobes keep their coefficients and turn their axes instead (extras.sg_axes).
+  if (!ao && lobes == 0 && options.up != UpAxis::Y)
     for (int c = 0; c < channels; ++c)
       transfer.middleCols(c * per_channel, per_channel) = transfer_in.middleCols(c * per_channel, per_channel) * sh_rotation(order, R).transpose();
   for (Eigen::Index v = 0; v < normals.rows(); ++v) {
@@ -233,6 +236,21 @@ std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const Ro
                  {"metadata", lines}};
   if (ao) {
     extras["ao"] = "ao=(1/pi)*integral(V*max(n.w,0)) in [0,1] (1 unoccluded) radiance=albedo*ambient*ao; COLOR_0 = (ao, ao, ao, 1)";
+  } else if (lobes > 0) {
+    const SgBasis basis = sg_basis(lobes);
+    json axes = json::array();
+    for (const Eigen::Vector3d& mu : basis.axes) {
+      const Eigen::Vector3d turned = R * mu;
+      axes.push_back({turned.x(), turned.y(), turned.z()});
+    }
+    extras["basis"] = "spherical-gaussian";
+    extras["sg_lobes"] = lobes;
+    extras["sg_sharpness"] = basis.sharpness;
+    extras["sg_axes"] = axes;
+    extras["sg_axes_note"] = "the file's axes (glTF: +Y up): prtsub's spherical-Fibonacci axes of the source turned by up.rotation";
+    extras["transfer"] = "V*max(n.w,0)~sum(c_k*G_k(w)), G_k(w)=exp(sharpness*(mu_k.w-1)); radiance=albedo/pi*sum(c_k*L_k), L_k=integral(L*G_k)";
+    extras["transfer_layout"] = "_PRT_k holds c_{4k}..c_{4k+3}; the last is zero-padded";
+    if (!quantization.is_null()) extras["quantization"] = quantization;
   } else {
     extras["sh_order"] = order;
     extras["sh_coefficients"] = per_channel;
@@ -561,6 +579,7 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
   };
 
   Asset a;
+  int lobes = 0;  // a spherical-Gaussian asset's lobe count
   size_t V = 0, n = 0;
   const std::vector<double> pos = r.accessor(attribute("POSITION"), "VEC3", 3, {kFloat}, V);
   const std::vector<double> nrm = r.accessor(attribute("NORMAL"), "VEC3", 3, {kFloat}, n);
@@ -585,13 +604,29 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
     a.transfer.resize(Vi, 1);
     for (Eigen::Index i = 0; i < Vi; ++i) a.transfer(i, 0) = ao[static_cast<size_t>(i)] / kAoPerT0;
   } else if (signal == "transfer") {
-    const json& o = r.member(extras, "sh_order", "meshes[0].extras");
-    const int order = o.is_number_integer() ? o.get<int>() : 0;
-    if (order < 1 || order > kMaxShOrder) r.fail("extras.sh_order " + o.dump() + " is not an order of 1 to 10");
-    const int per_channel = order * order;
+    int per_channel = 0;
+    if (extras.contains("sg_lobes")) {  // lobes: read as one channel of N values, made an SG asset below
+      const json& n_lobes = extras["sg_lobes"];
+      lobes = n_lobes.is_number_integer() ? n_lobes.get<int>() : 0;
+      if (lobes < kMinSgLobes || lobes > kMaxSgAssetLobes)
+        r.fail("extras.sg_lobes " + n_lobes.dump() + " is not a lobe count of " + std::to_string(kMinSgLobes) + " to " +
+               std::to_string(kMaxSgAssetLobes));
+      const json& sharp = extras.value("sg_sharpness", json());
+      const double want = sg_basis(lobes).sharpness;
+      if (!sharp.is_number() || !(std::abs(sharp.get<double>() - want) <= 1e-9 * want))
+        r.fail("extras.sg_sharpness " + sharp.dump() + " is not the sharpness of prtsub's " + std::to_string(lobes) + " lobes");
+      per_channel = lobes;
+    } else {
+      const json& o = r.member(extras, "sh_order", "meshes[0].extras");
+      const int order = o.is_number_integer() ? o.get<int>() : 0;
+      if (order < 1 || order > kMaxShOrder) r.fail("extras.sh_order " + o.dump() + " is not an order of 1 to 10");
+      per_channel = order * order;
+      a.order = order;
+    }
     const json ch = extras.value("channels", json(1));
     const int channels = ch.is_number_integer() ? ch.get<int>() : 0;
     if (channels != 1 && channels != 3) r.fail("extras.channels " + ch.dump() + " is neither 1 nor 3");
+    if (lobes > 0 && channels != 1) r.fail("extras.channels: spherical-Gaussian transfer is grey (one channel)");
     const int K = channels * per_channel;
     std::vector<double> scale(static_cast<size_t>(K), 1.0);
     if (extras.contains("quantization")) {
@@ -602,7 +637,7 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
         scale[static_cast<size_t>(c)] = s[static_cast<size_t>(c)].get<double>();
       }
     }
-    a.order = order, a.channels = channels;
+    a.channels = channels;
     a.transfer.resize(Vi, K);
     for (int chn = 0; chn < channels; ++chn)
       for (int k = 0; 4 * k < per_channel; ++k) {
@@ -666,13 +701,14 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
     if (!R.isIdentity(1e-12)) {
       a.positions = a.positions * R;  // rows: p_source = Rᵀ p_file
       a.normals = a.normals * R;
-      if (a.signal == AssetSignal::Transfer) {
+      if (a.signal == AssetSignal::Transfer && lobes == 0) {
         const Eigen::Index k = a.transfer.cols() / a.channels;
         for (int c = 0; c < a.channels; ++c)
           a.transfer.middleCols(c * k, k) = (a.transfer.middleCols(c * k, k) * sh_rotation(a.order, R.transpose()).transpose()).eval();
       }
     }
   }
+  if (lobes > 0) set_asset_lobes(a, RowMatrixXd(a.transfer));  // the coefficients of the source's own axes
   return a;
 }
 

@@ -16,6 +16,8 @@
 // the new vertices themselves see the shadow. Cost: one transfer per input face.
 #include "prtsub/prt/refine_signal.h"
 
+#include "prtsub/prt/sg_basis.h"
+
 #include "prtsub/prt/closest_point.h"
 
 #include <algorithm>
@@ -85,7 +87,9 @@ double probe_estimate(EdgeEstimate estimate, const FaceProbe& f, const double* p
 
 TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOptions& options)
     : scene_(scene), options_(options) {
-  check_transfer_options(options.transfer);
+  TransferOptions checked = options.transfer;
+  if (options.lobes) checked.progressive.non_negative = false;  // sg_transfer's to keep, refused for SH
+  check_transfer_options(checked);
   if (options.project_onto) source_offsets_ = vertex_offset_directions(*options.project_onto);
 }
 
@@ -131,10 +135,8 @@ void TransferSignal::compute_values(const std::vector<NewVertex>& batch, const R
   // A batch's vertices have consecutive indices: stream = render-vertex index.
   TransferOptions o = options_.transfer;
   o.stream_offset = batch.front().index;
-  TransferStats stats;
   std::vector<double> variance;
-  values = shadowed_transfer(scene_, points, normals, o, &stats, {}, &offsets, &variance);
-  rays_ += stats.rays;
+  values = trace(points, normals, o, &offsets, &variance);
   for (size_t i = 0; i < batch.size(); ++i) {
     if (batch[i].index >= variance_.size()) variance_.resize(batch[i].index + 1, 0.0);
     variance_[batch[i].index] = variance[i];
@@ -157,11 +159,26 @@ void TransferSignal::probe_faces(const std::vector<FaceProbe>& faces, std::vecto
   if (options_.project_onto) project(points, normals, nullptr);
   TransferOptions o = options_.transfer;
   o.stream_offset = uint64_t(1) << 40;  // streams apart from every vertex's
-  TransferStats stats;
-  RowMatrixXd t = shadowed_transfer(scene_, points, normals, o, &stats);
-  rays_ += stats.rays;
+  RowMatrixXd t = trace(points, normals, o, nullptr, nullptr);
   extra.resize(faces.size());
   for (size_t i = 0; i < faces.size(); ++i) extra[i] = probe_estimate(options_.estimate, faces[i], t.row(static_cast<Eigen::Index>(i)).data());
+}
+
+}  // namespace prtsub
+
+namespace prtsub {
+
+RowMatrixXd TransferSignal::trace(const RowMatrixX3d& points, const RowMatrixX3d& normals, const TransferOptions& o, const RowMatrixX3d* offsets,
+                                  std::vector<double>* variance) {
+  if (options_.lobes) {
+    rays_ += static_cast<uint64_t>(points.rows()) * static_cast<uint64_t>(o.rays);
+    if (variance) variance->assign(static_cast<size_t>(points.rows()), 0.0);
+    return sg_transfer(scene_, points, normals, *options_.lobes, o, offsets) * options_.lobe_metric;
+  }
+  TransferStats stats;
+  RowMatrixXd t = shadowed_transfer(scene_, points, normals, o, &stats, {}, offsets, variance);
+  rays_ += stats.rays;
+  return t;
 }
 
 }  // namespace prtsub

@@ -34,6 +34,12 @@ struct TransferSignalOptions {
   //! crease; not moved where it faces away: a thin wall's other side); the refined mesh's
   //! geometry is not moved. Not owned.
   const Mesh* project_onto = nullptr;
+  //! If set: the signal is these spherical-Gaussian lobes' coefficients (sg_transfer with
+  //! `transfer`), right-multiplied by lobe_metric, the Cholesky factor L of their Gram matrix
+  //! (G = L Lᵀ), so that refinement's Euclidean distances are L² distances on the sphere, as they
+  //! are for SH. Not owned.
+  const SgBasis* lobes = nullptr;
+  Eigen::MatrixXd lobe_metric;
 };
 
 //! An estimate's value on one edge (Probe ranks edges as Length does, Root as ‖Δt‖·√|ab|).
@@ -58,6 +64,9 @@ class TransferSignal : public RefinementSignal {
   const std::vector<double>& variance() const { return variance_; }
 
  private:
+  //! The signal at points: SH transfer, or the metric's lobes (variance then 0).
+  RowMatrixXd trace(const RowMatrixX3d& points, const RowMatrixX3d& normals, const TransferOptions& o, const RowMatrixX3d* offsets,
+                    std::vector<double>* variance);
   //! Moves points (and their normals and offsets) to their closest points on project_onto.
   void project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d* offsets);
   const RayScene& scene_;

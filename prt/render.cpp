@@ -209,7 +209,7 @@ ImageError image_error(const Image& a, const Image& b, Image* heat, double heat_
   if (a.channels < 3 || b.channels < 3) throw InputError("images need at least 3 channels (RGB)");
   const size_t n = static_cast<size_t>(a.width) * a.height;
   auto covered = [](const Image& img, size_t i) { return img.channels < 4 || img.pixels[i * img.channels + 3] > 0; };
-  double sum_sq = 0, sum_b = 0, max_b = 0;
+  double sum_sq = 0, sum_b = 0, sum_b2 = 0, max_b = 0;
   ImageError e;
   std::vector<double> pixel_err(n, -1);
   for (size_t i = 0; i < n; ++i) {
@@ -219,6 +219,7 @@ ImageError image_error(const Image& a, const Image& b, Image* heat, double heat_
       double d = double(a.pixels[i * a.channels + c]) - b.pixels[i * b.channels + c];
       se += d * d;
       sum_b += b.pixels[i * b.channels + c];
+      sum_b2 += double(b.pixels[i * b.channels + c]) * b.pixels[i * b.channels + c];
       max_b = std::max<double>(max_b, b.pixels[i * b.channels + c]);
     }
     sum_sq += se;
@@ -229,6 +230,7 @@ ImageError image_error(const Image& a, const Image& b, Image* heat, double heat_
   const double count = 3.0 * static_cast<double>(e.pixels);
   const double rmse = std::sqrt(sum_sq / count), mean_b = sum_b / count;
   e.rmse_relative = mean_b > 0 ? rmse / mean_b : std::numeric_limits<double>::infinity();
+  e.rmse_rms_relative = sum_b2 > 0 ? rmse / std::sqrt(sum_b2 / count) : std::numeric_limits<double>::infinity();
   e.psnr_db = rmse > 0 ? 20 * std::log10(max_b / rmse) : std::numeric_limits<double>::infinity();
   if (heat) {
     const auto& stops = kHeatStops;

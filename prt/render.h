@@ -75,6 +75,9 @@ Image render_reference(const RayScene& scene, const SurfaceHits& hits, const Row
 //! Error of image a against reference b over pixels covered in both (alpha > 0).
 struct ImageError {
   double rmse_relative = 0;  //!< RMSE over covered pixels and RGB, divided by b's mean there
+  //! ... divided by b's RMS there instead: the scale for lights that shade negative somewhere (a
+  //! random SH light), where b's mean can be near 0 or below
+  double rmse_rms_relative = 0;
   double psnr_db = 0;        //!< 20 log10(max of b / RMSE); infinite for identical images
   size_t pixels = 0;
 };

@@ -36,6 +36,19 @@ SgBasis sg_basis(int lobes) {
   return b;
 }
 
+int sg_shading_order(const SgBasis& basis) {
+  constexpr int kBands = 64;
+  const std::vector<double> g = sg_zonal(basis.sharpness, kBands);
+  double total = 0;
+  for (int l = 0; l < kBands; ++l) total += (2 * l + 1) * g[size_t(l)] * g[size_t(l)];
+  double rest = total;
+  for (int L = 1; L <= kMaxShOrder; ++L) {
+    rest -= (2 * L - 1) * g[size_t(L - 1)] * g[size_t(L - 1)];
+    if (rest <= 1e-6 * total) return L;
+  }
+  return kMaxShOrder;
+}
+
 void sg_eval(const SgBasis& basis, const Eigen::Vector3d& w, double* out) {
   for (int k = 0; k < basis.size(); ++k) out[k] = std::exp(basis.sharpness * (basis.axes[size_t(k)].dot(w) - 1));
 }

@@ -21,9 +21,18 @@ struct SgBasis {
 };
 
 constexpr int kMinSgLobes = 4, kMaxSgLobes = 64;
+//! The most lobes an asset takes: past 16, order-10 SH (kMaxShOrder, which every consumer relights
+//! through) no longer carries a lobe's light to 0.2% (sg_shading_order).
+constexpr int kMaxSgAssetLobes = 16;
 
 //! \throw InputError unless kMinSgLobes ≤ lobes ≤ kMaxSgLobes
 SgBasis sg_basis(int lobes);
+
+//! The SH order an SG asset is relit through (sg_to_sh at it, exact for every light of that order):
+//! the lowest whose bands hold a lobe's RMS to within 0.1% (Σ_{l≥L} (2l+1) g_l² ≤ 10⁻⁶ Σ_l (2l+1) g_l²),
+//! at most kMaxShOrder. What a light holds above it reaches the lobes at most that much: 8 for 9
+//! lobes, 10 for 12, and 10 for 16 (whose bands above hold 0.15%).
+int sg_shading_order(const SgBasis& basis);
 
 //! Every lobe's value at unit direction w (out: size() values).
 void sg_eval(const SgBasis& basis, const Eigen::Vector3d& w, double* out);

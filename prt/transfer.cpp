@@ -397,7 +397,7 @@ RowMatrixXd shadowed_transfer(const RayScene& scene, const RowMatrixX3d& points,
 }
 
 RowMatrixXd sg_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals, const SgBasis& basis,
-                        const TransferOptions& options, const RowMatrixX3d* offsets) {
+                        const TransferOptions& options, const RowMatrixX3d* offsets, const ProgressFn& progress) {
   TransferOptions opt = options;
   opt.estimator = TransferEstimator::Progressive;  // the same directions as pls: the hemisphere's lattice
   opt.progressive.non_negative = false;            // checked here, not refused as for SH
@@ -433,6 +433,7 @@ RowMatrixXd sg_transfer(const RayScene& scene, const RowMatrixX3d& points, const
       }
       for (int k = 0; k < N; ++k) out(i, k) = encoder.coefficients()[size_t(k)];
     }
+    if (progress) progress(static_cast<size_t>(range.size()));
   });
   scene.check("tracing transfer rays");
   return out;

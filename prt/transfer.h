@@ -117,7 +117,7 @@ struct SgBasis;
 //! \return #P by N
 //! \throw InputError as shadowed_transfer does, or for an empty lobe set
 RowMatrixXd sg_transfer(const RayScene& scene, const RowMatrixX3d& points, const RowMatrixX3d& normals, const SgBasis& basis,
-                        const TransferOptions& options, const RowMatrixX3d* offsets = nullptr);
+                        const TransferOptions& options, const RowMatrixX3d* offsets = nullptr, const ProgressFn& progress = {});
 
 //! The baseline for benchmarks: the same rays from the same points with the same thread
 //! count, with nothing done but counting occluded rays.
