@@ -225,7 +225,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
   r.set("signal", asset_signal_name(o.signal));
   r.set("bounces", res.bounce.passes);
-  r.set("channels", o.signal == AssetSignal::Ao ? 1 : std::max(transfer_channels(res.transfer.cols()), 1));
+  r.set("channels", o.signal == AssetSignal::Ao || o.sg_lobes > 0 ? 1 : std::max(transfer_channels(res.transfer.cols()), 1));
   if (o.albedo_colour.coloured()) r.set("albedo_source", albedo_description(o.albedo_colour));
   r.set("bounce_rekeyed_at", res.rekeyed_at);
   if (res.bounce.passes > 0) {

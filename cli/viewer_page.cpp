@@ -60,7 +60,7 @@ std::string viewer_data_json(const Asset& asset, const ViewerPageOptions& o) {
   const Eigen::Index K = asset.transfer.cols();
   if (o.error && (o.error->reference.rows() != o.error->positions.rows() || o.error->reference.cols() != K))
     throw InputError("viewer: the reference does not hold one row of " + std::to_string(K) + " values per error-view point");
-  const std::string glb = gltf_asset_bytes("viewer.glb", asset_mesh(asset), asset.transfer, asset.metadata, asset.signal, {}, asset.albedo);
+  const std::string glb = gltf_asset_bytes("viewer.glb", asset_mesh(asset), stored_values(asset), asset.metadata, asset.signal, {}, asset.albedo);
   std::string out = "{\"glb\":\"" + base64_encode(glb) + "\",\"name\":" + json_quote(o.name) + ",\"random_lights\":{";
   char number[32];
   for (size_t s = 0; s < o.random_seeds.size(); ++s) {

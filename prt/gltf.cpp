@@ -246,6 +246,7 @@ std::string gltf_asset_bytes(const std::string& path, const Mesh& mesh, const Ro
     extras["basis"] = "spherical-gaussian";
     extras["sg_lobes"] = lobes;
     extras["sg_sharpness"] = basis.sharpness;
+    extras["sg_shading_order"] = sg_shading_order(basis);  // lights projected to SH of this order, then onto the lobes
     extras["sg_axes"] = axes;
     extras["sg_axes_note"] = "the file's axes (glTF: +Y up): prtsub's spherical-Fibonacci axes of the source turned by up.rotation";
     extras["transfer"] = "V*max(n.w,0)~sum(c_k*G_k(w)), G_k(w)=exp(sharpness*(mu_k.w-1)); radiance=albedo/pi*sum(c_k*L_k), L_k=integral(L*G_k)";

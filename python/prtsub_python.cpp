@@ -51,18 +51,21 @@ py::array faces_view(const std::vector<Triangle>& t, py::handle owner) {
 // An asset in memory: what write_asset takes, plus what bake measured.
 struct PyAsset {
   Mesh mesh;
-  RowMatrixXd transfer;  // #V by N² (3·N² for RGB transfer), order-1 transfer for AO
+  RowMatrixXd transfer;  // #V by N² (3·N² for RGB transfer), order-1 transfer for AO; #V by lobes for SG
   RowMatrixX3d albedo;    // #V by 3 when the albedo is coloured, else no rows
   RowMatrixX3d vertices;  // render vertices' positions
   Eigen::VectorXd ao;     // AO assets: ao = t0 · kAoPerT0
   Metadata metadata;
   AssetSignal signal = AssetSignal::Transfer;
-  int order = 0;
+  int order = 0;  // SG: the SH order it is relit through (sg_shading_order)
+  int lobes = 0;  // SG assets: the lobe count (0: SH)
   py::dict stats;
   std::vector<std::string> warnings;
 
   void finish() {
     vertices = vertex_positions(mesh);
+    lobes = metadata_lobes(metadata, "the asset");
+    if (lobes > 0) order = sg_shading_order(sg_basis(lobes));
     if (signal == AssetSignal::Ao) ao = transfer.col(0) * kAoPerT0;
   }
 };
@@ -120,6 +123,11 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "pls_acceleration") o.transfer.progressive.acceleration = value.cast<double>();
     else if (key == "threads") o.transfer.threads = value.cast<int>();
     else if (key == "signal") o.signal = parse_asset_signal(value.cast<std::string>());
+    else if (key == "basis") {
+      const std::string b = value.cast<std::string>();
+      if (b.rfind("sg:", 0) == 0) o.sg_lobes = std::atoi(b.c_str() + 3), o.fit.method = FitMethod::Point;
+      else if (b != "sh") throw InputError("basis: 'sh' or 'sg:N', got '" + b + "'");
+    } else if (key == "sg_signed") o.sg_signed = value.cast<bool>();
     else if (key == "fit") o.fit.method = parse_fit_method(value.cast<std::string>());
     else if (key == "alpha") {
       if (py::isinstance<py::str>(value) && value.cast<std::string>() == "auto") o.alpha_auto = true;
@@ -158,7 +166,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
+                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, basis, sg_signed, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");
@@ -283,13 +291,14 @@ PYBIND11_MODULE(prtsub, m) {
         if (a.signal == AssetSignal::Ao) return py::none();
         return view(a.transfer.data(), a.transfer.rows(), a.transfer.cols(), self, true);
       }, "SH transfer, (V, N²) float64, index l(l+1)+m (docs/sh_convention.md); (V, 3·N²) for RGB transfer, the red, green and\n"
-         "blue blocks side by side; writeable; None for AO assets")
+         "blue blocks side by side; (V, lobes) lobe coefficients for an SG asset; writeable; None for AO assets")
+      .def_readonly("lobes", &PyAsset::lobes, "spherical-Gaussian lobes per vertex (basis='sg:N'), or 0 for SH")
       .def_property_readonly("albedo", [](py::object self) -> py::object {
         PyAsset& a = self.cast<PyAsset&>();
         if (a.albedo.rows() == 0) return py::none();
         return view(a.albedo.data(), a.albedo.rows(), 3, self);
       }, "the linear albedo at each vertex, (V, 3) float64, when it is coloured; None for a grey asset")
-      .def_property_readonly("channels", [](const PyAsset& a) { return a.signal == AssetSignal::Ao ? 1 : std::max(transfer_channels(a.transfer.cols()), 1); },
+      .def_property_readonly("channels", [](const PyAsset& a) { return a.signal == AssetSignal::Ao || a.lobes > 0 ? 1 : std::max(transfer_channels(a.transfer.cols()), 1); },
                              "1, or 3 for RGB transfer (a coloured albedo that bounced)")
       .def_property_readonly("ao", [](py::object self) -> py::object {
         const PyAsset& a = self.cast<const PyAsset&>();
@@ -323,7 +332,8 @@ PYBIND11_MODULE(prtsub, m) {
         return bake_mesh(mesh, o);
       }, py::arg("mesh_or_vertices"), py::arg("faces") = py::none(),
       "bake(vertices, faces, **options) or bake(mesh, **options): the whole pipeline, as `prtsub bake`.\n"
-      "Options: order (N or 'auto'), max_order, order_tolerance, rays, seed, threads, signal ('transfer'|'ao'), fit ('point'|'average'|'lsq'), alpha,\n"
+      "Options: order (N or 'auto'), max_order, order_tolerance, rays, seed, threads, signal ('transfer'|'ao'), basis ('sh'|'sg:N': N\n"
+      "spherical-Gaussian lobes, point values), sg_signed, fit ('point'|'average'|'lsq'), alpha,\n"
       "refine ('none'|'adaptive'|'uniform'), budget (below the input's count: simplify), levels, simplify_metric\n"
       "('transfer'|'geometry'), min_angle, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo (A, 'vertex', 'R,G,B' or\n"
       "(R, G, B)), albedo_map (a diffuse texture through the UVs), source.");
@@ -332,7 +342,7 @@ PYBIND11_MODULE(prtsub, m) {
         const Asset in = read_asset(path);
         PyAsset a;
         a.mesh = asset_mesh(in);
-        a.transfer = in.transfer;
+        a.transfer = stored_values(in);  // an SG asset's lobes, as the file has them
         a.albedo = in.albedo;
         a.metadata = in.metadata;
         a.signal = in.signal;
@@ -425,13 +435,14 @@ PYBIND11_MODULE(prtsub, m) {
         if (width < 1 || height < 1 || width > 16384 || height > 16384) throw InputError("size must be 1 to 16384 pixels a side");
         const Camera cam = camera_of(camera, bounds(a.vertices), width, height);
         const ShLight sh = light.at(a.order);
+        const RowMatrixXd shaded = a.lobes > 0 ? sg_to_sh(sg_basis(a.lobes), a.transfer, a.order) : a.transfer;
         auto* frame = new Image;
         {
           py::gil_scoped_release release;
           const RayScene scene(a.vertices, a.mesh.triangles);
           const SurfaceHits hits = trace_primary(scene, cam, width, height, threads);
-          *frame = shade_gouraud(hits, a.mesh.triangles, a.albedo.rows() > 0 ? vertex_radiance(a.transfer, sh, a.albedo)
-                                                                             : vertex_radiance(a.transfer, sh, albedo));
+          *frame = shade_gouraud(hits, a.mesh.triangles, a.albedo.rows() > 0 ? vertex_radiance(shaded, sh, a.albedo)
+                                                                             : vertex_radiance(shaded, sh, albedo));
         }
         py::capsule owner(frame, [](void* p) { delete static_cast<Image*>(p); });
         return py::array(py::dtype::of<float>(), {frame->height, frame->width, frame->channels},

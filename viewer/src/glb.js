@@ -1,6 +1,7 @@
 // Reads the GLB that `prtsub view` embeds (docs/asset_format.md, "glTF"): positions, normals,
 // indices, and the transfer (_PRT_0.._PRT_k, FLOAT or normalized SHORT with its scales; RGB
-// transfer as _PRT_R_j, _PRT_G_j, _PRT_B_j, with the vertices' albedo in COLOR_0) or AO (_AO). The file is the tool's own, uncompressed; anything else is an error with a message.
+// transfer as _PRT_R_j, _PRT_G_j, _PRT_B_j, with the vertices' albedo in COLOR_0; spherical-
+// Gaussian lobes as _PRT_j with the basis in extras.sg_*) or AO (_AO). The file is the tool's own, uncompressed; anything else is an error with a message.
 
 // componentType: [bytes, DataView getter]
 const COMPONENT = { 5121: [1, 'getUint8'], 5122: [2, 'getInt16'], 5123: [2, 'getUint16'], 5125: [4, 'getUint32'], 5126: [4, 'getFloat32'] };
@@ -35,7 +36,10 @@ export function parseGlb(bytes) {
   const V = positions.length / 3;
   const indices = Uint32Array.from(accessor(prim.indices));
   const ao = extras.signal === 'ao';
-  const order = ao ? 1 : extras.sh_order, K = order * order;
+  // Lobes (extras.sg_lobes): N values per vertex; lights are built at sg_shading_order and then
+  // projected onto the lobes (sh.js sgLight).
+  const lobes = ao ? 0 : extras.sg_lobes || 0;
+  const order = ao ? 1 : lobes ? extras.sg_shading_order : extras.sh_order, K = lobes || order * order;
   const channels = ao ? 1 : extras.channels || 1, KC = K * channels;  // per vertex: the channels' blocks side by side
   const transfer = new Float64Array(V * KC);
   let albedo = null;
@@ -53,5 +57,6 @@ export function parseGlb(bytes) {
       }
     if (prim.attributes.COLOR_0 !== undefined) albedo = accessor(prim.attributes.COLOR_0);  // linear, VEC3
   }
-  return { positions, normals, indices, transfer, order, channels, albedo, signal: ao ? 'ao' : 'transfer', extras };
+  const sg = lobes ? { lobes, axes: extras.sg_axes, sharpness: extras.sg_sharpness } : null;
+  return { positions, normals, indices, transfer, order, values: K, sg, channels, albedo, signal: ao ? 'ao' : 'transfer', extras };
 }

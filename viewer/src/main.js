@@ -14,7 +14,7 @@
 import studioPng from '../assets/studio.png';
 import { parseGlb } from './glb.js';
 import {
-  addLights, axisRotation, coefficientsLight, emptyLight, environmentLight, multiply3, rotateLight, skyLight, srgbToLinear, sunLight,
+  addLights, axisRotation, coefficientsLight, emptyLight, environmentLight, multiply3, rotateLight, sgLight, skyLight, srgbToLinear, sunLight,
 } from './sh.js';
 
 const status = (window.prtsubViewer = { ready: false, webgl2: false, error: null, frames: 0 });
@@ -216,7 +216,7 @@ async function main() {
   if (!gl) throw new Error('WebGL2 is not available in this browser');
   status.webgl2 = true;
 
-  const V = asset.positions.length / 3, K = asset.order * asset.order, KC = K * asset.channels;
+  const V = asset.positions.length / 3, K = asset.values, KC = K * asset.channels;
   const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
   for (let v = 0; v < V; ++v) for (let c = 0; c < 3; ++c) lo[c] = Math.min(lo[c], asset.positions[3 * v + c]), hi[c] = Math.max(hi[c], asset.positions[3 * v + c]);
   const radius = 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
@@ -298,10 +298,11 @@ async function main() {
   const relight = () => {
     let light = state.lights.map(lightOf).reduce(addLights);
     light = rotateLight(light, state.rotation);
-    const L = light.coeffs;
+    // Lobes dot what each lobe sees of the light; SH values dot the light's coefficients.
+    const lobeLight = asset.sg && sgLight(light, asset.sg.axes, asset.sg.sharpness);
     // channels 3: colour c dots the light's colour c with its own block; an asset's own albedo
     // (COLOR_0) replaces the page's grey one.
-    const shade = (t, channels, albedo) => {
+    const shade = (t, channels, albedo, L, K) => {
       const stride = K * channels, n = t.length / stride, out = new Float64Array(n * 3);
       for (let v = 0; v < n; ++v)
         for (let c = 0; c < 3; ++c) {
@@ -312,8 +313,10 @@ async function main() {
         }
       return out;
     };
-    radiance = shade(asset.transfer, asset.channels, asset.albedo);
-    if (errorMesh) errorRadiance = shade(errorMesh.asset, 1, null), referenceRadiance = shade(errorMesh.reference, 1, null);
+    const assetLight = lobeLight || light.coeffs, SK = asset.order * asset.order;
+    radiance = shade(asset.transfer, asset.channels, asset.albedo, assetLight, K);
+    // The error view's reference is SH of the asset's order, whatever the asset's basis.
+    if (errorMesh) errorRadiance = shade(errorMesh.asset, 1, null, assetLight, K), referenceRadiance = shade(errorMesh.reference, 1, null, light.coeffs, SK);
     fill();
   };
 
@@ -367,7 +370,7 @@ async function main() {
 }
 
 function errorGrid(asset, n, reference) {
-  const F = asset.indices.length / 3, K = asset.order * asset.order, per = ((n + 1) * (n + 2)) / 2;
+  const F = asset.indices.length / 3, K = asset.values, per = ((n + 1) * (n + 2)) / 2, SK = asset.order * asset.order;
   const positions = new Float32Array(F * per * 3), values = new Float64Array(F * per * K), indices = [];
   for (let f = 0; f < F; ++f) {
     const t = [asset.indices[3 * f], asset.indices[3 * f + 1], asset.indices[3 * f + 2]], base = f * per;
@@ -381,7 +384,7 @@ function errorGrid(asset, n, reference) {
         if (i + j < n - 1) indices.push(index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
       }
   }
-  if (reference.length !== values.length) throw new Error(`the error view's reference holds ${reference.length} values for ${values.length}`);
+  if (reference.length !== F * per * SK) throw new Error(`the error view's reference holds ${reference.length} values for ${F * per * SK}`);
   return { positions, indices: Uint32Array.from(indices), asset: values, reference };
 }
 
@@ -430,7 +433,7 @@ function panel(state, data, asset, reference, relight, fill, draw, decode) {
   };
   root.append(el('div', { className: 'title', textContent: data.name }));
   root.append(el('div', { className: 'info', textContent: `${asset.indices.length / 3} triangles, ${asset.positions.length / 3} vertices, ` +
-    (asset.signal === 'ao' ? 'ambient occlusion' : `SH order ${asset.order}`) }));
+    (asset.signal === 'ao' ? 'ambient occlusion' : asset.sg ? `${asset.sg.lobes} spherical-Gaussian lobes` : `SH order ${asset.order}`) }));
   const lights = [['sky', 'sky'], ['sun:0.5,1,0.6,2', 'sun'], ['sky+sun:0.5,1,0.6,2', 'sky and sun'], ['env:studio', 'studio (environment)'],
     ...Object.keys(data.random_lights).map((s) => [`random:${s}`, `random ${s}`]), ['sh:', 'SH coefficients…'], ['env:file', 'environment file…']];
   const select = el('select', {}, ...lights.map(([v, t]) => el('option', { value: v, textContent: t })));

@@ -245,3 +245,36 @@ export function multiply3(A, B) {
   for (let i = 0; i < 3; ++i) for (let j = 0; j < 3; ++j) for (let k = 0; k < 3; ++k) C[3 * i + j] += A[3 * i + k] * B[3 * k + j];
   return C;
 }
+
+// Spherical-Gaussian lobes G_k(ω) = exp(λ(μ_k·ω − 1)) (docs/sh_convention.md, "Spherical
+// Gaussians"). A lobe is zonal about its axis, so an SH light reaches it band by band (Funk–Hecke):
+// L_k = Σ_lm g_l y_lm(μ_k) l_lm, g_l = 4π e^{−λ} i_l(λ), i_l from its power series
+// i_l(x) = Σ_j x^{l+2j} / (2^j j! (2l+2j+1)!!), every term positive; e^{−λ} is folded in first so
+// sharp lobes stay finite (prt/sg_basis.cpp does the same).
+export function sgZonal(sharpness, order) {
+  const x = sharpness, g = new Float64Array(order);
+  let lead = 1;
+  for (let l = 0; l < order; ++l) {
+    if (l > 0) lead *= x / (2 * l + 1);
+    let term = Math.exp(-x) * lead, sum = 0;
+    for (let j = 0; j < 100000 && term > 1e-18 * sum; ++j) {
+      sum += term;
+      term *= (x * x) / (2 * (j + 1) * (2 * l + 2 * j + 3));
+    }
+    g[l] = 4 * Math.PI * sum;
+  }
+  return g;
+}
+
+// What each lobe sees of an SH light: N × 3 (RGB), row k = ∫ L G_k.
+export function sgLight(light, axes, sharpness) {
+  const order = light.order, K = order * order, g = sgZonal(sharpness, order), y = new Float64Array(K);
+  const out = new Float64Array(axes.length * 3);
+  axes.forEach((mu, k) => {
+    shEval(order, mu[0], mu[1], mu[2], y);
+    for (let l = 0; l < order; ++l)
+      for (let i = l * l; i < (l + 1) * (l + 1); ++i)
+        for (let c = 0; c < 3; ++c) out[3 * k + c] += g[l] * y[i] * light.coeffs[3 * i + c];
+  });
+  return out;
+}

@@ -49,6 +49,19 @@ check auto_camera "$work/spot.html" "$work/ref_auto.png" "light=sky"
 "$prtsub" render "$work/spot_ao.glb" --light const:1 --albedo 1 --camera "$camera" --size "$size" -o "$work/ref_ao.png" > /dev/null
 check ao_view "$work/spot_ao.html" "$work/ref_ao.png" "view=ao&camera=$camera"
 check error_view "$work/spot.html" - "view=error&light=sky&camera=$camera"
+# Spherical-Gaussian lobes, z-up so the glTF turns their axes: the page projects each light onto
+# the lobes as render does (through SH of the asset's shading order), under every kind of light.
+"$prtsub" bake "$mesh" -o "$work/spot_sg.glb" --basis sg:12 --up z --rays 128 > /dev/null
+"$prtsub" view "$work/spot_sg.glb" -o "$work/spot_sg.html" --source "$mesh" --rays 64 > /dev/null
+i=0
+for light in "sun:0.5,1,0.6,2" sky random:3 "env:$here/assets/studio.png"; do
+  query="light=${light}"
+  [[ $light == env:* ]] && query="light=env"
+  i=$((i + 1))
+  "$prtsub" render "$work/spot_sg.glb" --light "$light" --camera "$camera" --size "$size" -o "$work/ref_sg$i.png" > /dev/null
+  check "sg_light$i" "$work/spot_sg.html" "$work/ref_sg$i.png" "$query&camera=$camera"
+done
+check sg_error_view "$work/spot_sg.html" - "view=error&light=sky&camera=$camera"
 # The mouse and the panel: drags, the wheel, the light menu and the views redraw and change it.
 echo "== interaction"
 node test/interaction_test.mjs "$work/spot.html" || failed=1
