@@ -71,6 +71,7 @@ void check_lobe_options(const BakeOptions& o) {
                         : o.transfer.log != nullptr                ? "a sharded bake is SH's"
                         : o.refine == Refinement::Auto             ? "--refine auto is SH's (its simplification ranks collapses in SH)"
                         : o.transfer.first_ray != 0                ? "a single round of rays"
+                        : o.refine_only                            ? "--stage refine is for sharded bakes, which are SH's"
                                                                    : nullptr;
   if (refused) throw InputError(sg + refused);
 }

@@ -195,6 +195,8 @@ TEST(SgBake, WhatOnlyShHasIsRefusedWithTheReason) {
   refused(o, "ambient occlusion");
   o = lobe_options(12), o.refine = Refinement::Auto, o.adaptive.budget = 10;
   refused(o, "--refine auto");
+  o = lobe_options(12), o.refine_only = true;
+  refused(o, "--stage refine");
   // A budget below the input's would simplify: refused when the input's count is known.
   o = lobe_options(12, 16), o.refine = Refinement::Adaptive, o.adaptive.budget = 10;
   EXPECT_THROW(bake(sphere_on_plane(), o), InputError);

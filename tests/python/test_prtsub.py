@@ -256,5 +256,30 @@ class SphericalGaussianTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "between 4 and 64 lobes"):
             prtsub.sg_transfer(mesh, 3)
 
+    def test_a_baked_sg_asset_saves_loads_and_renders_as_its_lobes_relight(self):
+        v, f = box_on_ground()
+        mesh = prtsub.mesh(v, f)
+        a = prtsub.bake(mesh, basis="sg:9", rays=64)
+        self.assertEqual((a.lobes, a.order, a.channels), (9, 8, 1))  # relit through order 8 (sg_shading_order)
+        c = np.array(a.transfer)
+        self.assertEqual(c.shape, (len(a.vertices), 9))
+        self.assertGreaterEqual(c.min(), 0.0)
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "a.glb")
+            prtsub.save(a, path)
+            b = prtsub.load(path)
+        self.assertEqual(b.lobes, 9)
+        np.testing.assert_allclose(np.array(b.transfer), c, rtol=1e-6, atol=1e-7)
+        # Under constant light each lobe sees 4π e^{-λ} sinh(λ)/λ: a frame's pixels are albedo/π · Σ c_k of that.
+        img = prtsub.render(b, prtsub.constant([1, 1, 1]), (40, 30), albedo=1.0)
+        lam = math.log(2) / (1 - math.cos(math.sqrt(4 * math.pi / 9) / 2))
+        lobe = 4 * math.pi * math.exp(-lam) * math.sinh(lam) / lam
+        covered = img[..., 3] > 0
+        self.assertGreater(covered.sum(), 0)
+        self.assertLessEqual(img[..., 0][covered].max(), c.sum(axis=1).max() * lobe / math.pi * (1 + 1e-5))
+        self.assertGreaterEqual(img[..., 0][covered].min(), 0.0)
+        with self.assertRaisesRegex(ValueError, "--fit point"):
+            prtsub.bake(mesh, basis="sg:9", fit="lsq")
+
 if __name__ == "__main__":
     unittest.main()
