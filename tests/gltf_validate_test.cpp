@@ -66,6 +66,7 @@ TEST(GltfValidator, EveryBakedVariantIsValidAndCompressedFilesDecodeToTheUncompr
       {"ao.glb", {"--signal", "ao"}},
       {"aoc.glb", {"--signal", "ao", "--compress"}},
       {"rgb.glb", {"--bounces", "1", "--albedo", "0.9,0.5,0.2", "--quantize", "--compress"}},
+      {"sg.glb", {"--basis", "sg:9", "--up", "z", "--quantize", "--compress"}},
   };
   std::string files;
   for (const auto& [name, extra] : variants) {
