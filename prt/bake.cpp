@@ -562,7 +562,16 @@ double surface_area(const Mesh& m) {
 }
 
 void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
-  r.fit_data = sample_signal(r.mesh, scene, o, &r.transfer, &r.point_variance, progress);
+  // The pilot weighs a face's residual against its corners' noise. Early stop leaves vertices
+  // noisier where rays are dear, and the pilot would read that noise as hiding a shadow edge and
+  // leave the face unsampled (conference: 9.4k faces against fixed --rays' 23.8k, 2.5% more
+  // error). So it sees each vertex's variance at --rays, v·R_i/R: what interpolation would face had
+  // every vertex traced them. The fit itself weighs by the real variance.
+  std::vector<double> pilot_variance = r.point_variance;
+  if (early_stop_on(o))
+    for (size_t i = 0; i < pilot_variance.size(); ++i)
+      if (r.vertex_rays[i] > 0 && r.vertex_rays[i] < o.transfer.rays) pilot_variance[i] *= r.vertex_rays[i] / o.transfer.rays;
+  r.fit_data = sample_signal(r.mesh, scene, o, &r.transfer, &pilot_variance, progress);
   r.rays += r.fit_data.rays;
   r.seconds_samples = clock.lap();
   if (r.fit_data.allocation == SampleAllocation::Pilot && o.vertex_share > 0) {

@@ -8,6 +8,7 @@
 
 #include <map>
 #include <mutex>
+#include <numeric>
 
 #include "helpers.h"
 #include "prtsub/prt/evaluate.h"
@@ -414,6 +415,27 @@ TEST(Bake, EarlyStopDoublesWhereTheSphereMeetsThePlaneAndStopsOnTheOpenTop) {
   EXPECT_EQ(two.vertex_rays, one.vertex_rays);
   o.round_rays = 31;
   EXPECT_THROW(bake(mesh, o), InputError);
+}
+
+TEST(Bake, WithEarlyStopThePilotJudgesInterpolationAsIfEveryVertexHadItsRays) {
+  // The fit's pilot sends samples where interpolation fails, judged against the corners' noise.
+  // Early stop leaves some vertices noisier; judged at their own noise, the contact shadow's faces
+  // would look like noise and go unsampled. The pilot sees each vertex's variance at --rays, so
+  // it samples about the faces it samples when every vertex traces them, while the bake traces
+  // fewer rays.
+  const Mesh mesh = test::build(test::merge(test::icosphere(3), test::transformed(test::grid(8), 5.0, Eigen::Vector3d(-2.5, -2.5, -1.0))));
+  BakeOptions o;
+  o.transfer.rays = 1024;
+  const BakeResult fixed = bake(mesh, o);
+  o.round_rays = 32, o.stop_noise_percent = 4;
+  const BakeResult early = bake(mesh, o);
+  std::printf("sampled faces: fixed %zu, early stop %zu; vertex rays %.0f against %.0f\n", fixed.fit_data.plan.sampled_faces,
+              early.fit_data.plan.sampled_faces, std::accumulate(early.vertex_rays.begin(), early.vertex_rays.end(), 0.0),
+              std::accumulate(fixed.vertex_rays.begin(), fixed.vertex_rays.end(), 0.0));
+  ASSERT_GT(fixed.fit_data.plan.sampled_faces, 20u);
+  // Measured: 0.94 of fixed's faces; judged at each vertex's own noise, 0.88.
+  EXPECT_GE(double(early.fit_data.plan.sampled_faces), 0.92 * double(fixed.fit_data.plan.sampled_faces));
+  EXPECT_LT(early.rays, fixed.rays);
 }
 
 TEST(Bake, AmbientOcclusionIsOrderOneAndClamped) {
