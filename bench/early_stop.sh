@@ -5,7 +5,7 @@
 # asset judged by eval against one fixed reference (--rays 8192, --points 20000, its seed fixed),
 # so the columns compare the assets, not references.
 # Usage: bench/early_stop.sh [build dir] [scenes...]; FIT=point (the default) or FIT=lsq; SEED (default 0)
-# is every bake's --seed (eval's reference keeps its own).
+# is every bake's --seed (eval's reference keeps its own); EXTRA more bake options (e.g. "--signal ao").
 set -euo pipefail
 build=${1:-build}; shift || true
 scenes=${*:-bunny.ply armadillo.ply conference.ply sibenik.obj mori_knob.obj}
@@ -18,9 +18,9 @@ for s in $scenes; do
   configs=("--rays-fixed 1024" "--rays-fixed 512")
   for n in ${NOISE:-0.5 1 2}; do configs+=("--first-rays 32 --rays 1024 --ray-noise $n"); done
   for cfg in "${configs[@]}"; do
-    name=${s%.*}_$(echo "$cfg" | tr -d ' -')_${fit}_s${SEED:-0}
+    name=${s%.*}_$(echo "$cfg ${EXTRA:-}" | tr -d ' -')_${fit}_s${SEED:-0}
     # shellcheck disable=SC2086
-    "$build/prtsub" bake "$src" -o "$out/$name.ply" --fit "$fit" --seed "${SEED:-0}" $cfg --report "$out/$name.json" > /dev/null
+    "$build/prtsub" bake "$src" -o "$out/$name.ply" --fit "$fit" --seed "${SEED:-0}" ${EXTRA:-} $cfg --report "$out/$name.json" > /dev/null
     "$build/prtsub" eval "$out/$name.ply" --source "$src" --rays 8192 --points 20000 --report "$out/$name.eval.json" > /dev/null
     /usr/bin/python3 - "$out/$name.json" "$out/$name.eval.json" "$s" "$cfg" <<'PY'
 import json, sys
