@@ -9,6 +9,10 @@
 // Loop moves it, and the scene is built after it. Seeds: the vertices' rays depend on
 // (transfer.seed, render-vertex index), the samples' on a seed derived from transfer.seed, so
 // a bake is a function of its options and the mesh, not of threads or batching.
+//
+// Spherical-Gaussian bakes (sg_lobes) take a short branch of the same flow: each vertex's lobes
+// from the progressive encoder, then adaptive refinement on their whitened rows (bake_lobes);
+// the stages after it are SH's.
 #include "prtsub/prt/bake.h"
 
 #include <Eigen/Cholesky>
