@@ -372,30 +372,24 @@ Asset parse_asset(const std::string& bytes, const std::string& path) {
     K = -1;  // read
   }
   const int lobes = metadata_lobes(a.metadata, path);
-  if (lobes > 0) {
-    if (K != lobes)
-      throw InputError(path + ": metadata says " + std::to_string(lobes) + " spherical-Gaussian lobes, but vertices hold " + std::to_string(K) +
-                       " transfer values");
-    check_sg_metadata(a.metadata, sg_basis(lobes), path);
-    RowMatrixXd c(V, K);
-    for (int k = 0; k < K; ++k) {
-      const auto& col = *v->scalar("t" + std::to_string(k));
-      for (Eigen::Index i = 0; i < V; ++i) c(i, k) = col[static_cast<size_t>(i)];
-    }
-    if (!c.allFinite()) throw InputError(path + ": a lobe coefficient holds NaN or Inf");
-    set_asset_lobes(a, c);
-    K = -1;  // read
-  }
   if (K >= 0) {
-    int order = static_cast<int>(std::lround(std::sqrt(K)));
-    if (K == 0 || order * order != K || order > kMaxShOrder)
-      throw InputError(path + ": asset has " + std::to_string(K) + " transfer coefficients; expected N² for an order N of 1 to 10 (or one ao)");
-    a.order = order;
+    if (lobes > 0) {  // spherical-Gaussian lobes: c_k in t_k
+      if (K != lobes)
+        throw InputError(path + ": metadata says " + std::to_string(lobes) + " spherical-Gaussian lobes, but vertices hold " +
+                         std::to_string(K) + " transfer values");
+      check_sg_metadata(a.metadata, sg_basis(lobes), path);
+    } else {
+      const int order = static_cast<int>(std::lround(std::sqrt(K)));
+      if (K == 0 || order * order != K || order > kMaxShOrder)
+        throw InputError(path + ": asset has " + std::to_string(K) + " transfer coefficients; expected N² for an order N of 1 to 10 (or one ao)");
+      a.order = order;
+    }
     a.transfer.resize(V, K);
     for (int c = 0; c < K; ++c) {
       const auto& col = *v->scalar("t" + std::to_string(c));
       for (Eigen::Index i = 0; i < V; ++i) a.transfer(i, c) = col[static_cast<size_t>(i)];
     }
+    if (lobes > 0) set_asset_lobes(a, RowMatrixXd(a.transfer));  // NaN reaches the SH equivalent: the check below names the vertex
   }
   for (Eigen::Index i = 0; i < V; ++i) {
     if (!a.positions.row(i).allFinite() || !a.normals.row(i).allFinite() || !a.transfer.row(i).allFinite())
