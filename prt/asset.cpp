@@ -288,8 +288,7 @@ namespace {
 void check_sg_metadata(const Metadata& metadata, const SgBasis& basis, const std::string& path) {
   for (const auto& [key, value] : metadata)
     if (key == "sg_sharpness") {
-      const double s = std::strtod(value.c_str(), nullptr);
-      if (!(std::abs(s - basis.sharpness) <= 1e-9 * basis.sharpness))
+      if (!sg_sharpness_matches(basis, std::strtod(value.c_str(), nullptr)))
         throw InputError(path + ": metadata 'sg_sharpness " + value + "' is not the sharpness of prtsub's " + std::to_string(basis.size()) +
                          " lobes");
       return;

@@ -613,8 +613,7 @@ Asset parse_gltf(const std::string& bytes, const std::string& path) {
         r.fail("extras.sg_lobes " + n_lobes.dump() + " is not a lobe count of " + std::to_string(kMinSgLobes) + " to " +
                std::to_string(kMaxSgAssetLobes));
       const json& sharp = extras.value("sg_sharpness", json());
-      const double want = sg_basis(lobes).sharpness;
-      if (!sharp.is_number() || !(std::abs(sharp.get<double>() - want) <= 1e-9 * want))
+      if (!sharp.is_number() || !sg_sharpness_matches(sg_basis(lobes), sharp.get<double>()))
         r.fail("extras.sg_sharpness " + sharp.dump() + " is not the sharpness of prtsub's " + std::to_string(lobes) + " lobes");
       per_channel = lobes;
     } else {

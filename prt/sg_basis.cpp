@@ -49,6 +49,8 @@ int sg_shading_order(const SgBasis& basis) {
   return kMaxShOrder;
 }
 
+bool sg_sharpness_matches(const SgBasis& basis, double sharpness) { return std::abs(sharpness - basis.sharpness) <= 1e-9 * basis.sharpness; }
+
 void sg_eval(const SgBasis& basis, const Eigen::Vector3d& w, double* out) {
   for (int k = 0; k < basis.size(); ++k) out[k] = std::exp(basis.sharpness * (basis.axes[size_t(k)].dot(w) - 1));
 }

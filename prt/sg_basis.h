@@ -34,6 +34,10 @@ SgBasis sg_basis(int lobes);
 //! lobes, 10 for 12, and 10 for 16 (whose bands above hold 0.15%).
 int sg_shading_order(const SgBasis& basis);
 
+//! Whether a sharpness a file records is this set's (to 1e-9 of it): a reader relights with its
+//! own lobes, so a file of other lobes must be refused.
+bool sg_sharpness_matches(const SgBasis& basis, double sharpness);
+
 //! Every lobe's value at unit direction w (out: size() values).
 void sg_eval(const SgBasis& basis, const Eigen::Vector3d& w, double* out);
 
