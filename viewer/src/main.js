@@ -14,7 +14,7 @@
 import studioPng from '../assets/studio.png';
 import { parseGlb } from './glb.js';
 import {
-  addLights, axisRotation, coefficientsLight, emptyLight, environmentLight, multiply3, rotateLight, sgLight, skyLight, srgbToLinear, sunLight,
+  addLights, axisRotation, coefficientsLight, emptyLight, environmentLight, multiply3, rotateLight, sgLight, sgZonal, skyLight, srgbToLinear, sunLight,
 } from './sh.js';
 
 const status = (window.prtsubViewer = { ready: false, webgl2: false, error: null, frames: 0 });
@@ -294,6 +294,15 @@ async function main() {
     throw new Error(`unknown light '${spec}'`);
   };
 
+  // t0, the band-0 transfer AO is made of: lobes hold it as Σ_k c_k · g_0 y_0 (Funk–Hecke).
+  const lobeDc = asset.sg && sgZonal(asset.sg.sharpness, 1)[0] / (2 * Math.sqrt(Math.PI));
+  const dcOf = (v) => {
+    if (!asset.sg) return asset.transfer[v * KC];
+    let s = 0;
+    for (let k = 0; k < K; ++k) s += asset.transfer[v * K + k];
+    return s * lobeDc;
+  };
+
   let radiance = null, errorRadiance = null, referenceRadiance = null;
   const relight = () => {
     let light = state.lights.map(lightOf).reduce(addLights);
@@ -323,7 +332,7 @@ async function main() {
   // What each vertex carries into the shader for the current view.
   const fill = () => {
     const target = state.view === 'error' ? errorDraw : main, values = target.values;
-    if (state.view === 'ao') for (let v = 0; v < V; ++v) values.fill(asset.transfer[v * KC] * AO_PER_T0, 3 * v, 3 * v + 3);
+    if (state.view === 'ao') for (let v = 0; v < V; ++v) values.fill(dcOf(v) * AO_PER_T0, 3 * v, 3 * v + 3);
     else if (state.view === 'error') {
       const P = values.length / 3;
       let mean = 0;

@@ -62,6 +62,9 @@ for light in "sun:0.5,1,0.6,2" sky random:3 "env:$here/assets/studio.png"; do
   check "sg_light$i" "$work/spot_sg.html" "$work/ref_sg$i.png" "$query&camera=$camera"
 done
 check sg_error_view "$work/spot_sg.html" - "view=error&light=sky&camera=$camera"
+# The AO view of lobes: t0 = g_0 y_0 Σ c_k, what render shows under constant light 1 at albedo 1.
+"$prtsub" render "$work/spot_sg.glb" --light const:1 --albedo 1 --camera "$camera" --size "$size" -o "$work/ref_sg_ao.png" > /dev/null
+check sg_ao_view "$work/spot_sg.html" "$work/ref_sg_ao.png" "view=ao&camera=$camera"
 # The mouse and the panel: drags, the wheel, the light menu and the views redraw and change it.
 echo "== interaction"
 node test/interaction_test.mjs "$work/spot.html" || failed=1
