@@ -42,12 +42,20 @@ TopUpPlan plan_top_up_to_variance(const std::vector<double>& planning, const std
 double planned_variance(const TopUpPlan& plan, const std::vector<double>& variance, const std::vector<double>& rays,
                         const std::vector<double>& weight);
 
+//! How many rings smoothed_variance averages over by default: measured on the default bake (eval
+//! --rays 2048), armadillo AO 0.533% at one ring, 0.521% at three, 0.516% at six; armadillo
+//! transfer 1.146%, 1.134%, 1.132%; bunny transfer and AO a little better, the coarse scenes the same.
+constexpr int kVarianceRings = 6;
+
 //! Each vertex's per-ray variance averaged over the faces around it (each face the mean of its
 //! corners', weighed by its area), at the vertex's own ray count: what to plan with. One
 //! vertex's estimate compares two half-estimates, a chi-square of one degree of freedom per
 //! coefficient (AO has one coefficient): too noisy to allocate by alone, while the variance
-//! itself varies smoothly over the surface. Vertices with an unknown variance keep theirs.
-std::vector<double> smoothed_variance(const Mesh& mesh, const std::vector<double>& variance, const std::vector<double>& rays);
+//! itself varies smoothly over the surface. `rings` repeats the averaging (each time over the
+//! last one's values), reaching that many rings of faces; each keeps the area-weighted total.
+//! Vertices with an unknown variance keep theirs and spread nothing. \throw InputError for rings < 1
+std::vector<double> smoothed_variance(const Mesh& mesh, const std::vector<double>& variance, const std::vector<double>& rays,
+                                      int rings = kVarianceRings);
 
 //! A third of the area of the faces around each vertex: the weights for a surface error.
 std::vector<double> vertex_areas(const Mesh& mesh);

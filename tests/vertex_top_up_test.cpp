@@ -101,7 +101,7 @@ TEST(TopUp, SmoothedVarianceAveragesOverTheFacesAroundAVertex) {
   const size_t centre = 2 * 5 + 2;  // (2, 2) on the 5 × 5 vertex lattice
   v[centre] = 1.0 / 8;              // per-ray variance 1
   v[0] = INFINITY;
-  const std::vector<double> s = smoothed_variance(g, v, rays);
+  const std::vector<double> s = smoothed_variance(g, v, rays, 1);
   EXPECT_NEAR(s[centre] * 8, 1.0 / 3, 1e-12);
   EXPECT_TRUE(std::isinf(s[0]));
   EXPECT_EQ(s[4], 0.0);  // a corner far from the centre
@@ -110,9 +110,24 @@ TEST(TopUp, SmoothedVarianceAveragesOverTheFacesAroundAVertex) {
   double before = 0, after = 0;  // the area-weighted total is kept (no vertex here is unknown)
   std::vector<double> clean = v;
   clean[0] = 0;
-  const std::vector<double> sc = smoothed_variance(g, clean, rays), w = vertex_areas(g);
+  const std::vector<double> sc = smoothed_variance(g, clean, rays, 1), w = vertex_areas(g);
   for (size_t i = 0; i < V; ++i) before += w[i] * clean[i], after += w[i] * sc[i];
   EXPECT_NEAR(after, before, 1e-12);
+  // More rings: each is the same averaging of the last, so the total is still kept, the peak
+  // falls, and the variance reaches one ring further each time: (4, 2) is two edges from the centre.
+  const std::vector<double> s2 = smoothed_variance(g, clean, rays, 2), s3 = smoothed_variance(g, clean, rays, 3);
+  EXPECT_EQ(sc[2 * 5 + 4], 0.0);
+  EXPECT_GT(s2[2 * 5 + 4], 0.0);
+  EXPECT_LT(s2[centre], sc[centre]);
+  EXPECT_LT(s3[centre], s2[centre]);
+  double after2 = 0, after3 = 0;
+  for (size_t i = 0; i < V; ++i) after2 += w[i] * s2[i], after3 += w[i] * s3[i];
+  EXPECT_NEAR(after2, before, 1e-12);
+  EXPECT_NEAR(after3, before, 1e-12);
+  // Two rings are one ring applied to one ring's result (the same rays at every vertex here).
+  std::vector<double> s1_as_input = sc;
+  EXPECT_EQ(smoothed_variance(g, s1_as_input, rays, 1)[2 * 5 + 4], s2[2 * 5 + 4]);
+  EXPECT_THROW(smoothed_variance(g, clean, rays, 0), InputError);
 }
 
 TEST(TopUp, MoreRaysWhereTheyCountAndTheSameForAnyThreadCount) {
