@@ -17,13 +17,13 @@
 // it averaged over the faces around each vertex (smoothed_variance): armadillo transfer, all the
 // saved rays at the vertices, 1.305% → 1.264% eval error; AO 0.552% → 0.513% (measured with
 // independent rounds, before the continuation below). On a scan one ring is not enough: armadillo
-// AO at 256 rays, against a 4096-ray reference, the own estimates are right on the whole (mean
-// 4.98e-5 against a mean squared error of 5.1e-5) but barely per vertex (30% of the vertices read
-// 0 and err 1.5–2.9e-5; the top tenth reads 2.5e-4 and errs 6.4e-5). The averaging is therefore
-// repeated over kVarianceRings rings (the default bake, eval --rays 2048: armadillo AO 0.533% at
-// one ring, 0.516% at six). The real error there is nearly even over the surface, so no
-// allocation gains much: a simulation on those errors put the best one, knowing them, 13% under
-// an even spread in squared error.
+// AO at 256 rays against 4096 (bench/variance_calibration.sh), the own estimates are right on
+// the whole (mean 3.93e-5 against a mean squared error of 3.95e-5) but barely per vertex (28% of
+// the vertices read 0 and err 3.3e-5; the top tenth reads 2.3e-4 and errs 5.2e-5). The averaging
+// is therefore repeated over kVarianceRings rings (the default bake, eval --rays 2048: armadillo
+// AO 0.533% at one ring, 0.516% at six). The real error there is nearly even over the surface,
+// so no allocation gains much: a second round planned on the real errors leaves 0.86 of an even
+// one's squared error, on six rings 0.92, on one ring 0.99, on the own estimates 1.26.
 //
 // Each round continues the vertex's own lattice (the first round's seed and stream, from the
 // ray it stopped at; transfer.h), so the merged estimate is that of one round of the total and
