@@ -568,15 +568,34 @@ bool all_finite(const RowMatrixXd& m, int threads) {
   return ok;
 }
 
+// The moment rows any fit reads: those of faces with samples. The others are zero and never
+// read, and on a dense mesh with the pilot they are nearly all of them: the matrix is allocated
+// zeroed, untouched by the kernel until read, and a pass over it made armadillo refined to 1.5M
+// triangles 535 MiB larger.
+bool sampled_moments_finite(const SurfaceSamples& s, const FaceMoments& m, int threads) {
+  std::atomic<bool> ok{true};
+  const Eigen::Index K = m.rows.cols();
+  parallel_range(s.begin.size() - 1, threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
+    bool good = true;
+    for (size_t f = r.begin(); f < r.end(); ++f) {
+      if (!face_has_samples(s, f)) continue;
+      const double* p = m.rows.data() + static_cast<Eigen::Index>(3 * f) * K;
+      for (Eigen::Index k = 0; k < 3 * K; ++k) good &= std::abs(p[k]) <= DBL_MAX;
+    }
+    if (!good) ok = false;
+  });
+  return ok;
+}
+
 void check_fit_inputs(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& moments, const RowMatrixXd& prior,
                       const FitOptions& o) {
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   if (prior.rows() != V || prior.cols() != moments.rows.cols())
     throw InputError("fit: the prior needs one row per vertex and a column per value");
   if (!(o.alpha >= 0) || !std::isfinite(o.alpha)) throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.alpha));
-  if (!all_finite(moments.rows, o.threads) || !all_finite(prior, o.threads)) throw InputError("fit: non-finite sample values");
   check_samples(mesh, s);
   if (static_cast<size_t>(moments.rows.rows()) != 3 * mesh.num_faces()) throw InputError("fit: three rows of moments per face expected");
+  if (!sampled_moments_finite(s, moments, o.threads) || !all_finite(prior, o.threads)) throw InputError("fit: non-finite sample values");
 }
 
 // x = D⁻¹b, D the samples' own lumped mass: a true weighted average, which stays within the
@@ -965,6 +984,97 @@ size_t keep_non_negative(const RowMatrixXd& prior, RowMatrixXd& x, NonNegative m
 
 namespace {
 
+// With the pilot's allocation only the corners of sampled faces can be unknowns: a vertex whose
+// faces are all left to interpolation is fitted to its prior's own interpolant, which is its
+// prior. An unknown's row reaches the faces around it and, through the edge regulariser, the
+// faces across their edges; so the system assembled over the faces with a corner within one
+// ring (over positions) of a sampled face's corners is the whole mesh's system, row for row.
+// On a dense mesh that region is a few percent of the faces, and assembling there keeps the
+// fit's time and memory with the sampled faces, not the mesh (armadillo refined to 1.5M
+// triangles: BENCHMARKS.md, "The fit on the sampled region"). Only the degeneracy floors,
+// relative to the mean face, and the order sums are taken in differ from a whole-mesh assembly.
+struct FitRegion {
+  Mesh mesh;  // no faces: the region is most of the mesh, fit the whole
+  SurfaceSamples samples;
+  FaceMoments moments;
+  RowMatrixXd prior;
+  std::vector<uint32_t> vertex;  // the region's vertex → the mesh's, ascending (append_probes' order is kept)
+};
+
+FitRegion fit_region(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& m, const RowMatrixXd& prior) {
+  FitRegion r;
+  const size_t F = mesh.num_faces(), V = mesh.num_vertices(), P = static_cast<size_t>(mesh.positions.rows());
+  if (s.interpolated.size() != F || F == 0) return r;
+  const std::vector<uint32_t>& vp = mesh.vertex_position;
+  std::vector<char> seed(P, 0), ring(P, 0);
+  for (size_t f = 0; f < F; ++f)
+    if (face_has_samples(s, f))
+      for (uint32_t v : mesh.triangles[f]) seed[vp[v]] = 1;
+  for (const Triangle& t : mesh.triangles)
+    if (seed[vp[t[0]]] || seed[vp[t[1]]] || seed[vp[t[2]]])
+      for (uint32_t v : t) ring[vp[v]] = 1;
+  std::vector<uint32_t> faces;
+  for (uint32_t f = 0; f < F; ++f) {
+    const Triangle& t = mesh.triangles[f];
+    if (ring[vp[t[0]]] || ring[vp[t[1]]] || ring[vp[t[2]]]) faces.push_back(f);
+  }
+  if (faces.empty() || 2 * faces.size() > F) return r;
+  // Vertices and positions numbered in the mesh's order.
+  std::vector<int64_t> vslot(V, -1), pslot(P, -1);
+  for (uint32_t f : faces)
+    for (uint32_t v : mesh.triangles[f]) vslot[v] = 0, pslot[vp[v]] = 0;
+  uint32_t nv = 0, np = 0;
+  for (size_t v = 0; v < V; ++v)
+    if (vslot[v] >= 0) vslot[v] = nv++, r.vertex.push_back(static_cast<uint32_t>(v));
+  for (size_t p = 0; p < P; ++p)
+    if (pslot[p] >= 0) pslot[p] = np++;
+  Mesh& sub = r.mesh;
+  sub.positions.resize(np, 3);
+  for (size_t p = 0; p < P; ++p)
+    if (pslot[p] >= 0) sub.positions.row(pslot[p]) = mesh.positions.row(static_cast<Eigen::Index>(p));
+  const bool normals = static_cast<size_t>(mesh.normals.rows()) == V;
+  if (normals) sub.normals.resize(nv, 3);
+  r.prior.resize(nv, prior.cols());
+  sub.vertex_position.resize(nv);
+  for (uint32_t j = 0; j < nv; ++j) {
+    const uint32_t v = r.vertex[j];
+    sub.vertex_position[j] = static_cast<uint32_t>(pslot[vp[v]]);
+    if (normals) sub.normals.row(j) = mesh.normals.row(v);
+    r.prior.row(j) = prior.row(v);
+  }
+  sub.triangles.reserve(faces.size());
+  for (uint32_t f : faces) {
+    const Triangle& t = mesh.triangles[f];
+    sub.triangles.push_back({static_cast<uint32_t>(vslot[t[0]]), static_cast<uint32_t>(vslot[t[1]]), static_cast<uint32_t>(vslot[t[2]])});
+  }
+  sub.crease_angle_deg = mesh.crease_angle_deg;
+  // Every sample lies on a sampled face, and every sampled face is in the region: the samples
+  // keep their order, and each face its range.
+  r.samples = s;
+  std::vector<uint32_t> fslot(F, 0);
+  for (uint32_t k = 0; k < faces.size(); ++k) fslot[faces[k]] = k;
+  for (uint32_t& f : r.samples.face) f = fslot[f];
+  r.samples.begin.resize(faces.size() + 1);
+  r.samples.interpolated.resize(faces.size());
+  for (size_t k = 0; k < faces.size(); ++k) r.samples.begin[k] = s.begin[faces[k]], r.samples.interpolated[k] = s.interpolated[faces[k]];
+  r.samples.begin[faces.size()] = s.begin[faces.back() + 1];
+  if (r.samples.begin.front() != 0 || r.samples.begin.back() != s.size()) throw InputError("fit: samples outside the sampled faces");
+  const Eigen::Index K = m.rows.cols();
+  r.moments.rows = RowMatrixXd::Zero(static_cast<Eigen::Index>(3 * faces.size()), K);  // (only sampled faces' rows are read)
+  const bool variance = m.variance.size() == 3 * F;
+  if (variance) r.moments.variance.assign(3 * faces.size(), 0.0);
+  for (size_t k = 0; k < faces.size(); ++k)
+    for (size_t c = 0; c < 3 && face_has_samples(s, faces[k]); ++c) {
+      r.moments.rows.row(static_cast<Eigen::Index>(3 * k + c)) = m.rows.row(static_cast<Eigen::Index>(3 * size_t(faces[k]) + c));
+      if (variance) r.moments.variance[3 * k + c] = m.variance[3 * size_t(faces[k]) + c];
+    }
+  return r;
+}
+
+}  // namespace
+
+namespace {
+
 // The prior corrected by the known part's exact projection: point values + P(w·t_u) − w·t_u(n),
 // w each vertex's open share (t_u's curvature in n shows in t as far as the point is open; an
 // enclosed region's t is near zero and near linear). The fit then runs as ever around it: a
@@ -1025,22 +1135,37 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     x = average_values(sums, free, prior);
     stats.seconds_assemble = clock.total();
   } else {
-    FitSystem system = assemble_fit_system(mesh, s, moments, prior, o, &stats);
+    check_fit_inputs(mesh, s, moments, prior, o);
+    // The system on the sampled faces' region (fit_region), or on the whole mesh.
+    const FitRegion region = fit_region(mesh, s, moments, prior);
+    const bool part = region.mesh.num_faces() > 0;
+    const Mesh& rm = part ? region.mesh : mesh;
+    const SurfaceSamples& rs = part ? region.samples : s;
+    const FaceMoments& rmo = part ? region.moments : moments;
+    const RowMatrixXd& rp = part ? region.prior : prior;
+    FitSystem system = assemble_fit_system(rm, rs, rmo, rp, o, &stats);
     const bool weigh = o.weigh_by_noise && prior_variance && moments.variance.size() == 3 * mesh.num_faces() &&
                        prior_variance->size() == mesh.num_vertices();
     const Eigen::Index K = prior.cols();
-    if (weigh) append_probes(system, rhs_variance(mesh, moments));
-    RowMatrixXd start = prior;
+    if (weigh) append_probes(system, rhs_variance(rm, rmo));
+    RowMatrixXd start = rp;
     if (weigh) start.conservativeResize(Eigen::NoChange, K + kProbes), start.rightCols(kProbes).setZero();
     FitSystemSolver solver(system, o);
-    x = solver.solve(start, &stats);
-    if (weigh) {
-      std::vector<double> var_f(mesh.num_vertices());
-      for (size_t i = 0; i < var_f.size(); ++i)
-        var_f[i] = system.slot[i] < 0 ? INFINITY : x.row(static_cast<Eigen::Index>(i)).rightCols(kProbes).squaredNorm() / kProbes;
-      x.conservativeResize(Eigen::NoChange, K);
-      stats.kept_correction = weigh_by_noise(mesh, var_f, *prior_variance, prior, x);
+    RowMatrixXd xr = solver.solve(start, &stats);
+    std::vector<double> var_f(weigh ? mesh.num_vertices() : 0, INFINITY);  // the fit's variance; fixed vertices: unknown
+    for (size_t j = 0; j < rm.num_vertices() && weigh; ++j)
+      if (system.slot[j] >= 0)
+        var_f[part ? region.vertex[j] : j] = xr.row(static_cast<Eigen::Index>(j)).rightCols(kProbes).squaredNorm() / kProbes;
+    if (part) {
+      x = prior;
+      for (size_t j = 0; j < rm.num_vertices(); ++j) x.row(region.vertex[j]) = xr.row(static_cast<Eigen::Index>(j)).leftCols(K);
+      stats.unknowns = mesh.num_vertices();
+      stats.unsupported += mesh.num_vertices() - rm.num_vertices();
+    } else {
+      x = std::move(xr);
+      if (weigh) x.conservativeResize(Eigen::NoChange, K);
     }
+    if (weigh) stats.kept_correction = weigh_by_noise(mesh, var_f, *prior_variance, prior, x);
     stats.limited_vertices = keep_non_negative(prior, x, o.non_negative, o.threads);
     if (o.mass == MassMatrix::Sampled && static_cast<double>(s.size()) < 8.0 * static_cast<double>(mesh.num_faces()))
       stats.warning = "fit: the sampled mass matrix with under 8 samples per triangle extrapolates vertices that samples barely "
