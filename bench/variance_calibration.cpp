@@ -1,14 +1,15 @@
 // How well each vertex's own variance estimate (the two lattice halves of shadowed_transfer)
 // predicts its real squared error, and what planning the second round of vertex rays on it, or
-// on it averaged over rings of faces (smoothed_variance), could gain. One scene's AO (order 1):
-// R rays at seed 0 against a reference of REF rays at seed 7 (its own noise, estimated the same
-// way, is subtracted from the mean).
+// on it averaged over rings of faces (smoothed_variance), could gain. One scene's AO (order 1),
+// or its transfer of order ORDER (errors summed over the values): R rays at seed 0 against a
+// reference of REF rays at seed 7 (whose own noise, estimated the same way, is subtracted from
+// the mean).
 // The plans are modelled, not traced: every vertex keeps its R rays and a budget of R more per
 // vertex is water-filled on √(w·planner) (plan_top_up's rule without the powers of two); a
 // vertex's squared error then falls as R/R_i. "known error" plans on the real squared errors
 // averaged over six rings (what a planner that knew each vertex's variance would use), "even"
 // gives every vertex R more.
-// usage: bash bench/variance_calibration.sh BUILD SCENE [R] [REF]
+// usage: bash bench/variance_calibration.sh BUILD SCENE [R] [REF] [ORDER]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -50,13 +51,13 @@ std::vector<double> water_fill(const std::vector<double>& p, const std::vector<d
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return std::fprintf(stderr, "usage: variance_calibration SCENE [R] [REF]\n"), 2;
-  const int R = argc > 2 ? std::atoi(argv[2]) : 256, ref_rays = argc > 3 ? std::atoi(argv[3]) : 4096;
+  if (argc < 2) return std::fprintf(stderr, "usage: variance_calibration SCENE [R] [REF] [ORDER]\n"), 2;
+  const int R = argc > 2 ? std::atoi(argv[2]) : 256, ref_rays = argc > 3 ? std::atoi(argv[3]) : 4096, order = argc > 4 ? std::atoi(argv[4]) : 1;
   const Mesh mesh = load_mesh(argv[1]);
   const RayScene scene(mesh.positions, position_triangles(mesh));
   const RowMatrixX3d offsets = vertex_offset_directions(mesh), points = vertex_positions(mesh);
   TransferOptions o;
-  o.order = 1, o.rays = R, o.seed = 0;
+  o.order = order, o.rays = R, o.seed = 0;
   std::vector<double> var, ref_var;
   const RowMatrixXd t = shadowed_transfer(scene, points, mesh.normals, o, nullptr, {}, &offsets, &var);
   o.rays = ref_rays, o.seed = 7;
@@ -64,22 +65,22 @@ int main(int argc, char** argv) {
   const size_t V = mesh.num_vertices();
   const std::vector<double> w = vertex_areas(mesh), rays(V, R);
   std::vector<double> err2(V), own(V);
-  for (size_t i = 0; i < V; ++i) err2[i] = (t(i, 0) - ref(i, 0)) * (t(i, 0) - ref(i, 0)), own[i] = std::isfinite(var[i]) ? var[i] : 0;
-  std::printf("%s: %zu vertices, %d rays against %d\n", argv[1], V, R, ref_rays);
+  for (size_t i = 0; i < V; ++i) err2[i] = (t.row(i) - ref.row(i)).squaredNorm(), own[i] = std::isfinite(var[i]) ? var[i] : 0;
+  std::printf("%s: %zu vertices, order %d, %d rays against %d\n", argv[1], V, order, R, ref_rays);
   std::printf("area-weighted mean: own variance %.3g, squared error %.3g (reference's own variance %.3g subtracted)\n",
               weighted_mean(own, w), weighted_mean(err2, w) - weighted_mean(ref_var, w), weighted_mean(ref_var, w));
   const std::vector<double> ring1 = smoothed_variance(mesh, own, rays, 1), ring6 = smoothed_variance(mesh, own, rays, 6);
   // Vertices by their own estimate: those reading 0, then tenths of the rest.
   std::printf("\n| own estimate | vertices | mean own | mean squared error | one ring | six rings |\n|---|---:|---:|---:|---:|---:|\n");
-  std::vector<size_t> order(V);
-  for (size_t i = 0; i < V; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return own[a] < own[b]; });
+  std::vector<size_t> by_own(V);
+  for (size_t i = 0; i < V; ++i) by_own[i] = i;
+  std::sort(by_own.begin(), by_own.end(), [&](size_t a, size_t b) { return own[a] < own[b]; });
   // Halves that agree leave round-off (1e-32 where the mean is 1e-5): that counts as 0.
   const double zero = 1e-12 * weighted_mean(own, w);
   const size_t zeros = static_cast<size_t>(std::count_if(own.begin(), own.end(), [&](double v) { return v <= zero; }));
   auto row = [&](const char* name, size_t b, size_t e) {
     double s[4] = {0, 0, 0, 0};
-    for (size_t k = b; k < e; ++k) s[0] += own[order[k]], s[1] += err2[order[k]], s[2] += ring1[order[k]], s[3] += ring6[order[k]];
+    for (size_t k = b; k < e; ++k) s[0] += own[by_own[k]], s[1] += err2[by_own[k]], s[2] += ring1[by_own[k]], s[3] += ring6[by_own[k]];
     const double n = double(std::max<size_t>(e - b, 1));
     std::printf("| %s | %zu | %.3g | %.3g | %.3g | %.3g |\n", name, e - b, s[0] / n, s[1] / n, s[2] / n, s[3] / n);
   };
