@@ -1004,7 +1004,11 @@ struct FitRegion {
 FitRegion fit_region(const Mesh& mesh, const SurfaceSamples& s, const FaceMoments& m, const RowMatrixXd& prior) {
   FitRegion r;
   const size_t F = mesh.num_faces(), V = mesh.num_vertices(), P = static_cast<size_t>(mesh.positions.rows());
-  if (s.interpolated.size() != F || F == 0) return r;
+  // Shapes that do not match take the whole-mesh path, whose assembly reports them.
+  if (s.interpolated.size() != F || F == 0 || s.begin.size() != F + 1 || static_cast<size_t>(m.rows.rows()) != 3 * F ||
+      static_cast<size_t>(prior.rows()) != V || prior.cols() != m.rows.cols() ||
+      std::any_of(s.face.begin(), s.face.end(), [F](uint32_t f) { return f >= F; }))
+    return r;
   const std::vector<uint32_t>& vp = mesh.vertex_position;
   std::vector<char> seed(P, 0), ring(P, 0);
   for (size_t f = 0; f < F; ++f)
@@ -1135,10 +1139,12 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     x = average_values(sums, free, prior);
     stats.seconds_assemble = clock.total();
   } else {
-    check_fit_inputs(mesh, s, moments, prior, o);
-    // The system on the sampled faces' region (fit_region), or on the whole mesh.
+    // The system on the sampled faces' region (fit_region), or on the whole mesh. The assembly
+    // checks what it is given; the region's caller checks the whole (its prior rows outside the
+    // region become values too).
     const FitRegion region = fit_region(mesh, s, moments, prior);
     const bool part = region.mesh.num_faces() > 0;
+    if (part) check_fit_inputs(mesh, s, moments, prior, o);
     const Mesh& rm = part ? region.mesh : mesh;
     const SurfaceSamples& rs = part ? region.samples : s;
     const FaceMoments& rmo = part ? region.moments : moments;
