@@ -570,8 +570,8 @@ bool all_finite(const RowMatrixXd& m, int threads) {
 
 // The moment rows any fit reads: those of faces with samples. The others are zero and never
 // read, and on a dense mesh with the pilot they are nearly all of them: the matrix is allocated
-// zeroed, untouched by the kernel until read, and a pass over it made armadillo refined to 1.5M
-// triangles 535 MiB larger.
+// zeroed, untouched by the kernel until read, and a pass over it made the kernel back all of it
+// (most of armadillo refined to 1.5M triangles' peak, 1753 → 1077 MiB: BENCHMARKS.md).
 bool sampled_moments_finite(const SurfaceSamples& s, const FaceMoments& m, int threads) {
   std::atomic<bool> ok{true};
   const Eigen::Index K = m.rows.cols();
