@@ -21,6 +21,12 @@ struct HeldOut {
   Holdout h;
   HeldOut(const std::function<Eigen::Vector4d(const Eigen::Vector3d&)>& f, double noise, size_t per_face) {
     Rng rng(17, 0);
+    // Sized once: growing the matrices a row at a time copies them each time, which under
+    // AddressSanitizer (no in-place realloc) made each test take 105 s instead of 0.05.
+    const Eigen::Index n = Eigen::Index(mesh.num_faces() * per_face);
+    h.barycentric.resize(n, 3);
+    h.values.resize(n, 4);
+    Eigen::Index row = 0;
     for (uint32_t face = 0; face < mesh.num_faces(); ++face) {
       const Triangle& t = mesh.triangles[face];
       const double area = triangle_area(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]));
@@ -35,10 +41,9 @@ struct HeldOut {
           value[q] += std::sqrt(noise / 4) * g;
         }
         h.face.push_back(face), h.weight.push_back(area / double(per_face)), h.variance.push_back(noise);
-        h.barycentric.conservativeResize(h.barycentric.rows() + 1, 3);
-        h.barycentric.bottomRows(1) = b.transpose();
-        h.values.conservativeResize(h.values.rows() + 1, 4);
-        h.values.bottomRows(1) = value.transpose().cast<float>();
+        h.barycentric.row(row) = b.transpose();
+        h.values.row(row) = value.transpose().cast<float>();
+        ++row;
       }
     }
   }
