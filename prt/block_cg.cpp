@@ -9,6 +9,8 @@
 // then over blocks in order: the result is the same for any number of threads.
 #include "prtsub/prt/block_cg.h"
 
+#include "prtsub/prt/huge_pages.h"
+
 #include "prtsub/prt/parallel.h"
 
 #include <algorithm>
@@ -66,6 +68,7 @@ class Run {
       : A_(A), R_(B), X_(X), o_(o), n_(A.rows()), K_(B.cols()), blocks_{n_, K_, (n_ + kBlockRows - 1) / kBlockRows, o.threads, {}},
         P_(n_, K_), Y_(n_, K_) {
     blocks_.partial.resize(size_t(blocks_.count * K_));
+    prefer_huge_pages(P_), prefer_huge_pages(Y_);
   }
 
   // R = B − AX, in B's place (memory is what this costs most), P = R, and the norms of B and R.

@@ -68,6 +68,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "prtsub/prt/block_cg.h"
+#include "prtsub/prt/huge_pages.h"
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/unshadowed_projection.h"
@@ -148,8 +149,8 @@ const char* mass_matrix_name(MassMatrix m) { return m == MassMatrix::Analytic ? 
 
 namespace {
 
-std::vector<FaceGeometry> all_face_geometry(const Mesh& mesh, int threads = 0) {
-  std::vector<FaceGeometry> g(mesh.num_faces());
+HugeVector<FaceGeometry> all_face_geometry(const Mesh& mesh, int threads = 0) {
+  HugeVector<FaceGeometry> g(mesh.num_faces());
   parallel_range(g.size(), threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t f = r.begin(); f < r.end(); ++f) g[f] = face_geometry(mesh, mesh.triangles[f]);
   });
@@ -193,7 +194,7 @@ double sampled_mass_row(const SurfaceSamples& s, size_t f, int c, double row[3])
   return lumped;
 }
 
-double area_floor(const std::vector<FaceGeometry>& g) {
+double area_floor(const HugeVector<FaceGeometry>& g) {
   double total = 0;
   for (const FaceGeometry& f : g) total += f.area;
   return 1e-14 * total / static_cast<double>(std::max<size_t>(g.size(), 1));
@@ -203,7 +204,7 @@ double area_floor(const std::vector<FaceGeometry>& g) {
 // triangles, to a sink that either collects triplets or assembles the solver's system.
 
 template <class Emit>
-void emit_mass(const Mesh& mesh, const std::vector<FaceGeometry>& g, const SurfaceSamples& s, MassMatrix kind, double scale,
+void emit_mass(const Mesh& mesh, const HugeVector<FaceGeometry>& g, const SurfaceSamples& s, MassMatrix kind, double scale,
                Emit&& emit) {
   for (size_t f = 0; f < mesh.num_faces(); ++f) {
     const bool interpolated = face_interpolated(s, f);
@@ -226,7 +227,7 @@ void emit_mass(const Mesh& mesh, const std::vector<FaceGeometry>& g, const Surfa
 }
 
 template <class Emit>
-void emit_gradient(const Mesh& mesh, const std::vector<FaceGeometry>& g, double scale, Emit&& emit) {
+void emit_gradient(const Mesh& mesh, const HugeVector<FaceGeometry>& g, double scale, Emit&& emit) {
   const double floor = area_floor(g);
   for (size_t f = 0; f < mesh.num_faces(); ++f) {
     if (!(g[f].area > floor)) continue;
@@ -239,7 +240,7 @@ void emit_gradient(const Mesh& mesh, const std::vector<FaceGeometry>& g, double 
 // Interior edges: shared, with the same render vertices (lower, higher), by exactly two faces;
 // each as its two half-edges f·3 + c, c the corner opposite the edge. A boundary edge has one
 // face, a non-manifold one three or more; a crease's two sides have different render vertices.
-using EdgePairs = std::vector<std::array<uint32_t, 2>>;
+using EdgePairs = HugeVector<std::array<uint32_t, 2>>;
 EdgePairs interior_edge_pairs(const Mesh& mesh) {
   const EdgeAdjacency adj = edge_adjacency(mesh.triangles);
   EdgePairs pairs;
@@ -259,7 +260,7 @@ struct EdgeBlock {
   bool used = false;
 };
 
-EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const std::array<uint32_t, 2>& edge, double floor,
+EdgeBlock edge_block(const Mesh& mesh, const HugeVector<FaceGeometry>& g, const std::array<uint32_t, 2>& edge, double floor,
                      double scale) {
   EdgeBlock b;
   double area[2];
@@ -290,7 +291,7 @@ EdgeBlock edge_block(const Mesh& mesh, const std::vector<FaceGeometry>& g, const
 }
 
 template <class Emit>
-size_t emit_edge(const Mesh& mesh, const std::vector<FaceGeometry>& g, const EdgePairs& edges, double scale, Emit&& emit) {
+size_t emit_edge(const Mesh& mesh, const HugeVector<FaceGeometry>& g, const EdgePairs& edges, double scale, Emit&& emit) {
   const double floor = area_floor(g);
   size_t used = 0;
   for (const auto& edge : edges) {
@@ -306,7 +307,7 @@ size_t emit_edge(const Mesh& mesh, const std::vector<FaceGeometry>& g, const Edg
 // The used blocks by their first row (the least slot of their free vertices; ties keep edge
 // order): a row's blocks then lie near each other and near its neighbours' rows, as the
 // breadth-first numbering does for the rows themselves.
-std::vector<EdgeBlock> in_row_order(const std::vector<EdgeBlock>& blocks, const std::vector<Eigen::Index>& slot, Eigen::Index n) {
+HugeVector<EdgeBlock> in_row_order(const HugeVector<EdgeBlock>& blocks, const std::vector<Eigen::Index>& slot, Eigen::Index n) {
   const Buckets rows = bucket_sort(size_t(n) + 1, blocks.size(), 1, [&](size_t e, uint32_t) {
     if (!blocks[e].used) return Buckets::kNone;
     Eigen::Index r = n;
@@ -314,13 +315,13 @@ std::vector<EdgeBlock> in_row_order(const std::vector<EdgeBlock>& blocks, const 
       if (slot[v] >= 0) r = std::min(r, slot[v]);
     return static_cast<uint32_t>(r);
   });
-  std::vector<EdgeBlock> sorted(rows.entry.size());
+  HugeVector<EdgeBlock> sorted(rows.entry.size());
   for (size_t i = 0; i < sorted.size(); ++i) sorted[i] = blocks[rows.entry[i]];
   return sorted;
 }
 
 // Each vertex's (edge block, corner of the block) pairs 4e + i, in increasing block order.
-Buckets vertex_edges(size_t V, const std::vector<EdgeBlock>& blocks) {
+Buckets vertex_edges(size_t V, const HugeVector<EdgeBlock>& blocks) {
   return bucket_sort(V, blocks.size(), 4, [&](size_t e, uint32_t i) { return blocks[e].used ? blocks[e].idx[i] : Buckets::kNone; });
 }
 
@@ -374,6 +375,8 @@ RowSparseMatrixd assemble_rows(Eigen::Index n, int threads, Terms&& terms, Fixed
   outer[0] = 0;
   for (Eigen::Index si = 0; si < n; ++si) outer[si + 1] = outer[si] + length[size_t(si)];
   m.resizeNonZeros(outer[n]);
+  prefer_huge_pages(m.valuePtr(), size_t(outer[n]) * sizeof(double));
+  prefer_huge_pages(m.innerIndexPtr(), size_t(outer[n]) * sizeof(int));
   parallel_range(chunks, threads, Eigen::Index(1), [&](const tbb::blocked_range<Eigen::Index>& r) {
     for (Eigen::Index c = r.begin(); c < r.end(); ++c) {
       const Chunk& in = built[size_t(c)];
@@ -478,7 +481,7 @@ struct FaceSums {
 // Indexed by rank (vertex order[r] has rank r): each range of ranks walks the faces in
 // face_order, so a vertex sums its terms in that fixed order whatever the number of threads.
 // prior_ranked: the prior's rows in rank order.
-FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<FaceGeometry>& geom, const FaceMoments& moments,
+FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const HugeVector<FaceGeometry>& geom, const FaceMoments& moments,
                    const RowMatrixXd& prior_ranked, const std::vector<uint32_t>& rank, const std::vector<uint32_t>& face_order,
                    const FitOptions& o) {
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
@@ -488,7 +491,9 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   // ∫h_i (f − g_prior) from the samples and add back the exact ∫h_i g_prior = A·prior: the error
   // is then proportional to how far f is from the prior's interpolant. Still unbiased: E[A_s] = A.
   const bool use_cv = o.method == FitMethod::LeastSquares && o.mass == MassMatrix::Analytic && o.control_variate;
-  FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd::Zero(V, K)};
+  FaceSums sums{Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), Eigen::VectorXd::Zero(V), RowMatrixXd(V, K)};
+  prefer_huge_pages(sums.b);
+  sums.b.setZero();
   // Each sampled face's three rows of its samples' own mass and their lumped masses, once per
   // face (the vertex ranges below would read the samples once per corner).
   // (Stored for the sampled faces only: with the pilot, a few percent of them.)
@@ -496,7 +501,7 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
   uint32_t count = 0;
   for (size_t f = 0; f < mesh.num_faces(); ++f)
     if (!face_interpolated(s, f) && face_has_samples(s, f)) sampled[f] = count++;
-  std::vector<std::array<double, 4>> corner_mass(3 * size_t(count));
+  HugeVector<std::array<double, 4>> corner_mass(3 * size_t(count));
   parallel_range(mesh.num_faces(), o.threads, size_t(1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t f = r.begin(); f < r.end(); ++f)
       if (sampled[f] != UINT32_MAX)
@@ -506,7 +511,7 @@ FaceSums sum_faces(const Mesh& mesh, const SurfaceSamples& s, const std::vector<
         }
   });
   // The faces' corners by rank, in walk order: every range reads them, so they are looked up once.
-  std::vector<std::array<uint32_t, 3>> ranked(face_order.size());
+  HugeVector<std::array<uint32_t, 3>> ranked(face_order.size());
   parallel_range(face_order.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i)
       for (int c = 0; c < 3; ++c) ranked[i][size_t(c)] = rank[mesh.triangles[face_order[i]][size_t(c)]];
@@ -615,12 +620,13 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   const Stopwatch clock;
   const auto V = static_cast<Eigen::Index>(mesh.num_vertices());
   const Eigen::Index K = moments.rows.cols();
-  const std::vector<FaceGeometry> geom = all_face_geometry(mesh, o.threads);
+  const HugeVector<FaceGeometry> geom = all_face_geometry(mesh, o.threads);
   const Buckets corners = vertex_corners(mesh.triangles, mesh.num_vertices());
   const std::vector<uint32_t> by_rank = breadth_first_order(mesh.triangles, corners, mesh.num_vertices());
   std::vector<uint32_t> rank(static_cast<size_t>(V));
   for (uint32_t r = 0; r < by_rank.size(); ++r) rank[by_rank[r]] = r;
   RowMatrixXd prior_ranked(V, K);
+  prefer_huge_pages(prior_ranked);
   parallel_range(V, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
     for (Eigen::Index i = r.begin(); i < r.end(); ++i) prior_ranked.row(i) = prior.row(by_rank[size_t(i)]);
   });
@@ -658,7 +664,7 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   std::vector<uint32_t> live_edges;
   for (uint32_t e = 0; e < edges.size(); ++e)
     if (live[e]) live_edges.push_back(e);
-  std::vector<EdgeBlock> blocks(live_edges.size());
+  HugeVector<EdgeBlock> blocks(live_edges.size());
   parallel_range(live_edges.size(), o.threads, size_t(4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) blocks[i] = edge_block(mesh, geom, edges[live_edges[i]], floor, o.alpha);
   });

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <vector>
 
+#include "prtsub/prt/huge_pages.h"
 #include "prtsub/prt/sampling.h"
 
 namespace prtsub {
@@ -123,3 +125,22 @@ TEST(BlockCg, DoesNotDependOnTheCallersStorageState) {
 
 }  // namespace
 }  // namespace prtsub
+
+// Huge-page advice (prt/huge_pages.h) is a hint to the kernel: it must leave every value as
+// written, on ranges of any alignment and size, and a HugeVector must behave as a std::vector.
+TEST(HugePages, AdviceLeavesValuesAsWrittenAndHugeVectorsBehaveAsVectors) {
+  const size_t n = (size_t(5) << 20) + 3;  // 40 MiB of doubles, plus an unaligned tail
+  std::vector<double> plain(n);
+  prtsub::prefer_huge_pages(plain.data() + 1, (n - 1) * sizeof(double));  // unaligned start
+  prtsub::prefer_huge_pages(nullptr, 1 << 30);
+  prtsub::prefer_huge_pages(plain.data(), 100);
+  for (size_t i = 0; i < n; ++i) plain[i] = double(i) * 0.5;
+  prtsub::HugeVector<double> huge(n, 0.0);
+  for (size_t i = 0; i < n; ++i) huge[i] = double(i) * 0.5;
+  EXPECT_TRUE(std::equal(plain.begin(), plain.end(), huge.begin()));
+  prtsub::HugeVector<double> moved = std::move(huge);
+  moved.push_back(-1.0);
+  ASSERT_EQ(moved.size(), n + 1);
+  EXPECT_EQ(moved[n - 1], double(n - 1) * 0.5);
+  EXPECT_EQ(moved[n], -1.0);
+}
