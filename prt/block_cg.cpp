@@ -10,7 +10,6 @@
 #include "prtsub/prt/block_cg.h"
 
 #include "prtsub/prt/huge_pages.h"
-
 #include "prtsub/prt/parallel.h"
 
 #include <algorithm>

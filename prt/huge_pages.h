@@ -1,10 +1,10 @@
 // Large arrays a stage writes once and then reads a few times (the fit's system and right-hand
 // sides, block CG's vectors) cost most of their time in first-touch page faults where faults
-// are dear: on our 2-core virtual machine one 4 KiB fault costs some 10 µs, and armadillo's full
-// fit system faulted in ~40k of them (BENCHMARKS.md, "The solve"). Asking the kernel for
-// transparent huge pages on such an array, before it is first written, takes 512 times fewer.
-// It is only advice: where huge pages are off (transparent_hugepage "never") nothing changes,
-// and the values never depend on it.
+// are dear, as on our 2-core virtual machine: 31% of a `prtsub bench --solve` profile on
+// armadillo was the kernel's fault handler (BENCHMARKS.md, "The solve"). Asking the kernel for
+// transparent huge pages on such an array, before it is first written, takes 512 times fewer
+// faults. It is only advice: where huge pages are off (transparent_hugepage "never") nothing
+// changes, and the values never depend on it.
 #pragma once
 
 #include <cstddef>
