@@ -3,7 +3,7 @@
 # at nice $NICE (default 19; NICE=0 on an otherwise idle core) with its own growing corpus,
 # and /usr/bin/time records the CPU time it actually got
 # (libFuzzer's -max_total_time is wall time). Same flags as .ci/fuzz. Build the targets first:
-#   bash .ci/fuzz obj ply off stl asset    (builds build-fuzz/, then runs each for 60 s)
+#   bash .ci/fuzz obj ply off stl asset    (builds build-sanitize/, then runs each for 60 s)
 # usage: bash bench/fuzz_long.sh OUT_DIR SECONDS READER...   (readers run concurrently)
 #   then: tail -n 12 OUT_DIR/log_READER.txt; cat OUT_DIR/time_READER.txt
 set -euo pipefail
@@ -11,7 +11,7 @@ out=$1 seconds=$2
 shift 2
 root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out/bin"
-cp "$root"/build-fuzz/tests/fuzz/fuzz_* "$out/bin/"
+cp "$root"/build-sanitize/tests/fuzz/fuzz_* "$out/bin/"
 [ -d "$out/corpus" ] || python3 "$root/tests/fuzz/make_corpus.py" "$out/corpus"
 for reader in "$@"; do
   mkdir -p "$out/art/$reader"
