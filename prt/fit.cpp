@@ -64,6 +64,8 @@
 #include <cfloat>
 #include <cstdio>
 #include <cmath>
+#include <stdexcept>
+#include <type_traits>
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -329,59 +331,55 @@ Buckets vertex_edges(size_t V, const HugeVector<EdgeBlock>& blocks) {
 // terms are gathered from its vertex's corners (faces in increasing order: the mass, then the
 // gradient term) and edge blocks in a fixed order, and each entry sums its own in that order,
 // so the values do not depend on the number of threads. A term on a vertex fixed at its prior
-// goes to the right-hand side instead (emit_fixed). Rows are built in fixed chunks, in parallel,
-// and then laid out in order.
+// goes to the right-hand side instead (emit_fixed). Two passes over the rows, each in parallel:
+// the first counts each row's distinct columns (the terms' columns only, no values), which lays
+// out the matrix; the second writes every row straight into its place. Per-chunk buffers and
+// their copy into the matrix cost more than the counting pass (their pages are fresh memory).
 template <class Terms, class Fixed>
 RowSparseMatrixd assemble_rows(Eigen::Index n, int threads, Terms&& terms, Fixed&& emit_fixed) {
-  constexpr Eigen::Index kChunk = 1024;
-  const Eigen::Index chunks = (n + kChunk - 1) / kChunk;
-  struct Chunk {
-    std::vector<int> col;
-    std::vector<double> value;
-  };
-  std::vector<Chunk> built(static_cast<size_t>(chunks));
-  std::vector<int> length(static_cast<size_t>(n), 0);
+  constexpr Eigen::Index kGrain = 1024;
   struct Scratch {
     std::vector<std::pair<int, double>> terms;
     std::vector<int> position, distinct;
-    std::vector<double> sum;
   };
-  tbb::enumerable_thread_specific<Scratch> scratch([n] { return Scratch{{}, std::vector<int>(size_t(n), -1), {}, {}}; });
-  parallel_range(chunks, threads, Eigen::Index(1), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    Scratch& w = scratch.local();
-    for (Eigen::Index c = r.begin(); c < r.end(); ++c) {
-      Chunk& out = built[size_t(c)];
-      for (Eigen::Index si = c * kChunk; si < std::min(n, (c + 1) * kChunk); ++si) {
-        w.terms.clear(), w.distinct.clear();
-        terms(si, [&](Eigen::Index sj, uint32_t j, double x) {
-          if (sj < 0) emit_fixed(si, j, x);
-          else w.terms.emplace_back(static_cast<int>(sj), x);
-        });
-        for (const auto& t : w.terms)
-          if (w.position[size_t(t.first)] < 0) w.position[size_t(t.first)] = 0, w.distinct.push_back(t.first);
-        std::sort(w.distinct.begin(), w.distinct.end());
-        for (size_t k = 0; k < w.distinct.size(); ++k) w.position[size_t(w.distinct[k])] = static_cast<int>(k);
-        w.sum.assign(w.distinct.size(), 0.0);
-        for (const auto& t : w.terms) w.sum[size_t(w.position[size_t(t.first)])] += t.second;
-        for (int col : w.distinct) w.position[size_t(col)] = -1;
-        out.col.insert(out.col.end(), w.distinct.begin(), w.distinct.end());
-        out.value.insert(out.value.end(), w.sum.begin(), w.sum.end());
-        length[size_t(si)] = static_cast<int>(w.distinct.size());
-      }
-    }
-  });
+  tbb::enumerable_thread_specific<Scratch> scratch([n] { return Scratch{{}, std::vector<int>(size_t(n), -1), {}}; });
   RowSparseMatrixd m(n, n);
   int* outer = m.outerIndexPtr();
+  parallel_range(n, threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& r) {
+    Scratch& w = scratch.local();
+    for (Eigen::Index si = r.begin(); si < r.end(); ++si) {
+      w.distinct.clear();
+      terms(si, std::false_type(), [&](Eigen::Index sj, uint32_t, double) {
+        if (sj >= 0 && w.position[size_t(sj)] < 0) w.position[size_t(sj)] = 0, w.distinct.push_back(static_cast<int>(sj));
+      });
+      for (int col : w.distinct) w.position[size_t(col)] = -1;
+      outer[si + 1] = static_cast<int>(w.distinct.size());
+    }
+  });
   outer[0] = 0;
-  for (Eigen::Index si = 0; si < n; ++si) outer[si + 1] = outer[si] + length[size_t(si)];
+  for (Eigen::Index si = 0; si < n; ++si) outer[si + 1] += outer[si];
   m.resizeNonZeros(outer[n]);
   prefer_huge_pages(m.valuePtr(), size_t(outer[n]) * sizeof(double));
   prefer_huge_pages(m.innerIndexPtr(), size_t(outer[n]) * sizeof(int));
-  parallel_range(chunks, threads, Eigen::Index(1), [&](const tbb::blocked_range<Eigen::Index>& r) {
-    for (Eigen::Index c = r.begin(); c < r.end(); ++c) {
-      const Chunk& in = built[size_t(c)];
-      std::copy(in.col.begin(), in.col.end(), m.innerIndexPtr() + outer[c * kChunk]);
-      std::copy(in.value.begin(), in.value.end(), m.valuePtr() + outer[c * kChunk]);
+  parallel_range(n, threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& r) {
+    Scratch& w = scratch.local();
+    for (Eigen::Index si = r.begin(); si < r.end(); ++si) {
+      w.terms.clear(), w.distinct.clear();
+      terms(si, std::true_type(), [&](Eigen::Index sj, uint32_t j, double x) {
+        if (sj < 0) emit_fixed(si, j, x);
+        else w.terms.emplace_back(static_cast<int>(sj), x);
+      });
+      for (const auto& t : w.terms)
+        if (w.position[size_t(t.first)] < 0) w.position[size_t(t.first)] = 0, w.distinct.push_back(t.first);
+      if (static_cast<int>(w.distinct.size()) != outer[si + 1] - outer[si])
+        throw std::logic_error("fit: a row's columns changed between the assembly's two passes");
+      std::sort(w.distinct.begin(), w.distinct.end());
+      for (size_t k = 0; k < w.distinct.size(); ++k) w.position[size_t(w.distinct[k])] = static_cast<int>(k);
+      double* value = m.valuePtr() + outer[si];
+      std::fill(value, value + w.distinct.size(), 0.0);
+      for (const auto& t : w.terms) value[w.position[size_t(t.first)]] += t.second;
+      for (int col : w.distinct) w.position[size_t(col)] = -1;
+      std::copy(w.distinct.begin(), w.distinct.end(), m.innerIndexPtr() + outer[si]);
     }
   });
   return m;
@@ -670,7 +668,9 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   });
   blocks = in_row_order(blocks, sys.slot, n);  // (the used ones)
   const Buckets vertex_blocks = vertex_edges(size_t(V), blocks);
-  auto terms = [&](Eigen::Index si, auto&& add_term) {
+  // (values: std::true_type, or false_type for the columns alone, whose values are then unused)
+  auto terms = [&](Eigen::Index si, auto values, auto&& add_term) {
+    constexpr bool kValues = decltype(values)::value;
     const uint32_t v = order[size_t(si)];
     auto add = [&](uint32_t j, double x) { add_term(sys.slot[j], j, x); };
     const uint32_t* first = corners.entry.data() + corners.begin[v];
@@ -684,8 +684,8 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
       if (o.mass == MassMatrix::Analytic || interpolated) {  // an interpolated face's data is exact
         for (int j = 0; j < 3; ++j) add(tri[j], geom[f].area / (j == c ? 6 : 12));
       } else {
-        double row[3];
-        sampled_mass_row(s, f, c, row);
+        double row[3] = {0, 0, 0};
+        if constexpr (kValues) sampled_mass_row(s, f, c, row);
         for (int j = 0; j < 3; ++j) add(tri[j], row[j]);
       }
     }
