@@ -53,6 +53,9 @@ Report bench_solve(const Mesh& mesh, const BakeOptions& b, int repeat) {
   r.set("seconds_samples", t_samples);
   r.set("seconds_fit_best", best_total);
   r.set("seconds_fit_assemble", best.seconds_assemble);
+  r.set("seconds_fit_assemble_sums", best.seconds_assemble_sums);
+  r.set("seconds_fit_assemble_edges", best.seconds_assemble_edges);
+  r.set("seconds_fit_assemble_rows", best.seconds_assemble_rows);
   r.set("seconds_fit_factor", best.seconds_factor);
   r.set("seconds_fit_solve", best.seconds_solve);
   r.set("fit_solver", best.solver);

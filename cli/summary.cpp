@@ -138,6 +138,9 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("fit_predicted_factor_nonzeros", f.predicted_factor_entries);
   r.set("solve_memory_mib", f.solve_memory_mib);
   r.set("seconds_fit_assemble", f.seconds_assemble);
+  r.set("seconds_fit_assemble_sums", f.seconds_assemble_sums);
+  r.set("seconds_fit_assemble_edges", f.seconds_assemble_edges);
+  r.set("seconds_fit_assemble_rows", f.seconds_assemble_rows);
   r.set("seconds_fit_factor", f.seconds_factor);
   r.set("seconds_fit_solve", f.seconds_solve);
   r.set("noise_weighting", o.weigh_by_noise);

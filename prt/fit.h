@@ -80,6 +80,9 @@ struct FitStats {
   double solve_memory_mib = 0;     //!< system plus factor (or CG's vectors) plus right-hand sides, as stored
   double stabilizer = 0;           //!< λ of the pull towards the prior that was needed (0: none)
   double seconds_assemble = 0, seconds_factor = 0, seconds_solve = 0;
+  //! Parts of seconds_assemble (the system's): the sums over faces (right-hand sides and masses),
+  //! the regulariser's edge blocks (with the unknowns' numbering), the matrix's rows
+  double seconds_assemble_sums = 0, seconds_assemble_edges = 0, seconds_assemble_rows = 0;
   //! weigh_by_noise: the mean share of the fit's correction kept (1: the fit, 0: the prior)
   double kept_correction = 1;
   size_t limited_vertices = 0;     //!< non_negative: vertices whose values it changed
