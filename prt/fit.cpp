@@ -333,8 +333,9 @@ Buckets vertex_edges(size_t V, const HugeVector<EdgeBlock>& blocks) {
 // so the values do not depend on the number of threads. A term on a vertex fixed at its prior
 // goes to the right-hand side instead (emit_fixed). Two passes over the rows, each in parallel:
 // the first counts each row's distinct columns (the terms' columns only, no values), which lays
-// out the matrix; the second writes every row straight into its place. Per-chunk buffers and
-// their copy into the matrix cost more than the counting pass (their pages are fresh memory).
+// out the matrix; the second writes every row straight into its place. This replaced per-chunk
+// buffers copied into the matrix afterwards: the same time within the machine's noise
+// (BENCHMARKS.md, "What grows faster than the mesh"), without the buffers' memory.
 template <class Terms, class Fixed>
 RowSparseMatrixd assemble_rows(Eigen::Index n, int threads, Terms&& terms, Fixed&& emit_fixed) {
   constexpr Eigen::Index kGrain = 1024;
