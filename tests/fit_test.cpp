@@ -376,6 +376,22 @@ TEST(Fit, SampledMassAndEdgeRegularizerReproduceLinearSignalsExactly) {
   EXPECT_EQ(st.unsupported, 0u);
 }
 
+TEST(Fit, TheAssemblysPartsAreTimedWithinItsTotal) {
+  // The report splits seconds_assemble into the face sums, the edge blocks and the rows: each
+  // part is recorded (a pass over 1280 faces takes some time) and together they fit in the total.
+  Mesh m = test::build(test::icosphere(3));
+  SurfaceSamples s = make_surface_samples(m, SampleOptions{});
+  const Signal f = [](const Eigen::Vector3d& p) { return std::sin(3 * p.x()) + p.y() * p.z(); };
+  FitOptions o = plain_fit();
+  o.alpha = 0.1;
+  FitStats st;
+  fit_vertex_values(m, s, at_samples(s, f), RowMatrixXd::Zero(Eigen::Index(m.num_vertices()), 1), o, &st);
+  EXPECT_GT(st.seconds_assemble_sums, 0.0);
+  EXPECT_GT(st.seconds_assemble_edges, 0.0);
+  EXPECT_GT(st.seconds_assemble_rows, 0.0);
+  EXPECT_LE(st.seconds_assemble_sums + st.seconds_assemble_edges + st.seconds_assemble_rows, st.seconds_assemble);
+}
+
 TEST(Fit, ManyRightHandSidesMatchADenseSolveColumnByColumn) {
   // Order 10: 100 right-hand sides through one factorisation.
   Mesh m = test::build(test::icosphere(1));
