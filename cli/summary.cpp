@@ -80,6 +80,12 @@ void record_sample_spread(Report& r, const FitData& data) {
   r.set("pilot_samples_drawn", data.plan.pilot_drawn);
   r.set("pilot_rays", data.plan.rays);
   r.set("seconds_pilot", data.plan.seconds);
+  if (data.plan.screen_samples > 0) {
+    r.set("pilot_screen_samples", data.plan.screen_samples);
+    r.set("pilot_screen_ratio", data.plan.screen_ratio);
+    r.set("pilot_screen_standard_error", data.plan.screen_standard_error);
+    r.set("pilot_screened_out", data.plan.screened_out);
+  }
   r.set("sampled_faces", data.plan.sampled_faces);
   r.set("interpolated_faces", F - data.plan.sampled_faces);
 }
@@ -382,7 +388,15 @@ void print_bake_summary(const Report& r) {
                        "{sample_rays_variation}, noise measured on {sample_rays_noise_points} samples ({sample_rays_noise_rays} rays)"});
     if (r.has("pilot_samples"))
       r.print(stdout, {"              pilot: {pilot_samples} of {pilot_samples_drawn} samples traced ({pilot_rays} rays, {seconds_pilot:3} s) found {sampled_faces} "
-                       "faces where interpolation fails; {interpolated_faces} left to it",
+                       "faces where interpolation fails; {interpolated_faces} left to it"});
+    if (r.has("pilot_screen_samples"))
+      r.print(stdout, {r.format("{pilot_screened_out}") == "yes"
+                           ? "              screen: on {pilot_screen_samples} samples the variation inside the faces is {pilot_screen_ratio:3} "
+                             "(+- {pilot_screen_standard_error:3}) of the vertices' noise: the pilot stopped there, every face left to interpolation"
+                           : "              screen: on {pilot_screen_samples} samples the variation inside the faces is {pilot_screen_ratio:3} "
+                             "(+- {pilot_screen_standard_error:3}) of the vertices' noise: the pilot goes on"});
+    if (r.has("pilot_samples"))
+      r.print(stdout, {
                        "              faces by samples: 0: {faces_with_samples_0}, 1: {faces_with_samples_1}, 2-3: "
                        "{faces_with_samples_2_3}, 4-7: {faces_with_samples_4_7}, 8-15: {faces_with_samples_8_15}, 16-31: "
                        "{faces_with_samples_16_31}, 32-63: {faces_with_samples_32_63}, 64+: {faces_with_samples_64_up}",

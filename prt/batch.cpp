@@ -66,7 +66,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s << "\n";
   const PilotOptions& p = o.pilot;
   s << "pilot " << p.per_triangle << " " << p.min_samples << " " << p.rays << " " << p.rings << " " << p.significance << " " << p.area_share
-    << " " << p.holdout << " " << p.first_share << " " << p.first_significance << "\n";
+    << " " << p.holdout << " " << p.first_share << " " << p.first_significance << " screen " << p.screen_ratio << " " << p.screen_samples << "\n";
   const SimplifyOptions& q = o.simplify;
   s << "simplify " << simplify_metric_name(q.metric) << " " << q.geometry_weight << " " << q.min_angle_deg << " " << q.feature_tolerance << " "
     << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << "\n";

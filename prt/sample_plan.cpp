@@ -132,7 +132,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
 
   // Each traced sample's excess d = ‖r‖² − v and noise v. A stage traces its samples in groups
   // of 64, each with its own stream (its index), so a sample's rays do not depend on the stage.
-  std::vector<double> excess(S, 0.0), noise(S, 0.0);
+  std::vector<double> excess(S, 0.0), noise(S, 0.0), vertex_noise(S, 0.0);
   TransferStats stats;
   SamplePlan plan;
   // The hold-out: every stride-th sample of the first stage, which covers the whole surface.
@@ -142,6 +142,8 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   held.face.resize(n_held), held.weight.resize(n_held), held.variance.resize(n_held);
   held.barycentric.resize(static_cast<Eigen::Index>(n_held), 3);
   held.values.resize(static_cast<Eigen::Index>(n_held), K);
+  std::vector<size_t> slot(S, SIZE_MAX);  // each held-out sample's row
+  for (size_t h = 0; h < n_held; ++h) slot[first[h * stride]] = h;
   // The pilot samples `which`: their points, normals and offsets, row by row.
   auto gather = [&](const std::vector<size_t>& which, RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d& offsets) {
     const auto n = static_cast<Eigen::Index>(which.size());
@@ -151,8 +153,9 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
       points.row(j) = pilot.points.row(k), normals.row(j) = pilot.normals.row(k), offsets.row(j) = pilot.offsets.row(k);
     }
   };
-  auto trace = [&](const std::vector<size_t>& which, bool keep_holdout) {
+  auto trace = [&](const std::vector<size_t>& which) {
     const size_t n = which.size();
+    if (n == 0) return;
     const bool all = n == S;  // one stage: the pilot's own arrays and streams, no copies
     RowMatrixX3d points, normals, offsets;
     std::vector<uint64_t> streams;
@@ -173,14 +176,14 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
           Eigen::VectorXd r(K), known(K);
           for (size_t i = 0; i < rows; ++i) {
             const size_t j = group_begin[g] + i, k = which[j];
-            if (keep_holdout && stride > 0 && j % stride == 0) {  // rows of distinct samples: no two threads share one
-              const auto h = static_cast<Eigen::Index>(j / stride);
+            if (slot[k] != SIZE_MAX) {  // rows of distinct samples: no two threads share one
+              const auto h = static_cast<Eigen::Index>(slot[k]);
               held.face[size_t(h)] = pilot.face[k], held.weight[size_t(h)] = pilot.weight[k], held.variance[size_t(h)] = variance[i];
               held.barycentric.row(h) = pilot.barycentric.row(static_cast<Eigen::Index>(k));
               for (Eigen::Index q = 0; q < K; ++q) held.values(h, q) = static_cast<float>(values[i * size_t(K) + size_t(q)]);
             }
             const Triangle& t = mesh.triangles[pilot.face[k]];
-            double v = variance[i];
+            double v = variance[i], vn = 0;
             for (Eigen::Index q = 0; q < K; ++q) r[q] = values[i * size_t(K) + size_t(q)];
             if (o.exact_unshadowed) {
               const auto kk = static_cast<Eigen::Index>(k);
@@ -190,9 +193,10 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
             for (int c = 0; c < 3; ++c) {
               const double h = pilot.barycentric(static_cast<Eigen::Index>(k), c);
               r -= h * compared.row(t[c]).transpose();
-              v += h * h * prior_variance[t[c]];
+              vn += h * h * prior_variance[t[c]];
             }
-            noise[k] = v;
+            v += vn;
+            noise[k] = v, vertex_noise[k] = vn;
             excess[k] = r.squaredNorm() - v;
           }
         },
@@ -232,7 +236,59 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
         plan.sample_rays.rays_traced += st.rays, stats.rays += st.rays;
       }
   };
-  trace(first, true);
+  // The screen (PilotOptions::screen_ratio): a spread share of the hold-out, traced first.
+  if (o.screen_ratio > 0 && n_held > 0) {
+    const size_t step = std::max<size_t>(1, (n_held + o.screen_samples - 1) / std::max<size_t>(o.screen_samples, 1));
+    std::vector<size_t> screen;
+    for (size_t h = 0; h < n_held; h += step) screen.push_back(first[h * stride]);
+    trace(screen);
+    if (to.log) to.log->barrier(false);  // a sharded bake: the decision reads the screen
+    // The ratio of two area-weighted sums over the screen, and its standard error (delta method).
+    double sd = 0, sv = 0;
+    for (size_t k : screen)
+      if (std::isfinite(excess[k]) && std::isfinite(vertex_noise[k])) sd += pilot.weight[k] * excess[k], sv += pilot.weight[k] * vertex_noise[k];
+    plan.screen_samples = screen.size();
+    plan.screen_ratio = sv > 0 ? sd / sv : INFINITY;
+    double e2 = 0;
+    if (sv > 0)
+      for (size_t k : screen)
+        if (std::isfinite(excess[k]) && std::isfinite(vertex_noise[k])) {
+          const double e = pilot.weight[k] * (excess[k] - plan.screen_ratio * vertex_noise[k]);
+          e2 += e * e;
+        }
+    plan.screen_standard_error = sv > 0 ? std::sqrt(e2) / sv : 0;
+    if (sv > 0 && plan.screen_ratio + plan.screen_standard_error < o.screen_ratio) {
+      plan.screened_out = true;
+      Holdout kept;  // the screen's rows of the hold-out, in order
+      kept.face.reserve(screen.size()), kept.weight.reserve(screen.size()), kept.variance.reserve(screen.size());
+      kept.barycentric.resize(static_cast<Eigen::Index>(screen.size()), 3);
+      kept.values.resize(static_cast<Eigen::Index>(screen.size()), K);
+      for (size_t j = 0; j < screen.size(); ++j) {
+        const size_t h = j * step;
+        kept.face.push_back(held.face[h]), kept.weight.push_back(held.weight[h]), kept.variance.push_back(held.variance[h]);
+        kept.barycentric.row(static_cast<Eigen::Index>(j)) = held.barycentric.row(static_cast<Eigen::Index>(h));
+        kept.values.row(static_cast<Eigen::Index>(j)) = held.values.row(static_cast<Eigen::Index>(h));
+      }
+      held = std::move(kept);
+      // The phases a sharded bake counts on pass with nothing traced in them.
+      if (to.log) to.log->barrier(false);
+      if (to.log && two_stages) to.log->barrier(false);
+      if (progress) progress(S - screen.size());
+      plan.face_weight.assign(F, 0.0);
+      plan.pilot_drawn = S;
+      plan.pilot_samples = screen.size();
+      plan.rays = stats.rays;
+      plan.seconds = clock.total();
+      return plan;
+    }
+  }
+  {
+    std::vector<size_t> rest;  // the first stage, but for the screen's samples
+    rest.reserve(first.size());
+    for (size_t k : first)
+      if (!traced[k]) rest.push_back(k);
+    trace(rest);
+  }
   if (!two_stages) measure(std::vector<char>(F, 1));
   if (to.log) to.log->barrier(false);  // a sharded bake: what follows reads the first stage
 
@@ -315,7 +371,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     std::vector<size_t> second;
     for (size_t k = 0; k < S; ++k)
       if (!traced[k] && candidate[pilot.face[k]]) second.push_back(k);
-    trace(second, false);
+    trace(second);
     measure(candidate);
     if (to.log) to.log->barrier(false);
     if (progress) progress(S - first.size() - second.size());  // the untraced rest: the bar completes

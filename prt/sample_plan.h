@@ -57,6 +57,14 @@ struct PilotOptions {
   //! measurement costs at most an eighth of the pilot's rays, and is skipped below 64 points.
   std::vector<int> sample_ray_choices;
   size_t noise_points = 1000;
+  //! The screen: before the pilot proper, up to `screen_samples` of its hold-out samples (spread
+  //! over the surface) are traced, and their area-weighted mean excess Σw·d compared with the
+  //! interpolated vertex noise Σw·Σh²·var x̂ at the same points. When that ratio is below
+  //! `screen_ratio` by one of its standard errors, the signal's variation inside the faces is
+  //! smaller than the noise the vertices' own rays leave (a dense scan): the pilot stops there,
+  //! no face gets samples, and the screen's samples are the hold-out. 0: no screen.
+  double screen_ratio = 1;
+  size_t screen_samples = 65536;
 };
 
 //! What the pilot measured for the rays per fit sample, and (filled by choose_sample_rays) the choice.
@@ -101,6 +109,10 @@ struct SamplePlan {
   size_t sampled_faces = 0;         //!< faces with a positive weight
   double sampled_area = 0;          //!< their area
   Holdout holdout;                  //!< at most PilotOptions::holdout of the pilot samples
+  size_t screen_samples = 0;        //!< traced by the screen (0: no screen)
+  double screen_ratio = 0;          //!< the screen's excess over the vertex noise (inf where that noise is 0)
+  double screen_standard_error = 0;
+  bool screened_out = false;        //!< the pilot stopped after the screen: no face is sampled
   SampleRaysChoice sample_rays;     //!< with PilotOptions::sample_ray_choices: the rays per fit sample
   uint64_t rays = 0;
   double seconds = 0;

@@ -48,7 +48,8 @@ int shard_phases(const BakeOptions& in) {
   const int early = early_stop_on(o) ? early_stop_rounds(o.round_rays, o.transfer.rays) : 0;
   if (o.fit.method == FitMethod::Point) return 1 + early;
   if (o.allocation != SampleAllocation::Pilot || o.pilot.rays < 2) return 1 + early;
-  return (o.pilot.first_share > 0 && o.pilot.first_share < 1 ? 3 : 2) + early;
+  const int screen = o.pilot.screen_ratio > 0 && o.pilot.holdout > 0 ? 1 : 0;
+  return (o.pilot.first_share > 0 && o.pilot.first_share < 1 ? 3 : 2) + screen + early;
 }
 
 namespace {

@@ -154,6 +154,68 @@ TEST(SamplePlan, TwoStagesTraceTheRestOnlyWhereTheFirstCouldNotClearAFace) {
   EXPECT_EQ(staged.pilot_drawn, drawn);
 }
 
+TEST(SamplePlan, TheScreenWeighsTheInterpolationErrorAgainstTheVerticesNoise) {
+  // The open plane's transfer is exact at any ray count and the same at every point, so with
+  // every vertex value off by δ and given a variance σ², each screened sample's excess is exactly
+  // ‖δ‖² − σ²Σh² and its vertex noise σ²Σh² (h its barycentrics): the ratio is
+  // ‖δ‖²·Σw / (σ²·Σw·Σh²) − 1 in closed form.
+  Ground g(false);
+  const double sigma2 = 1e-4;
+  Eigen::RowVectorXd delta = Eigen::RowVectorXd::Zero(g.prior.cols());
+  delta[0] = 0.0048, delta[2] = -0.0064;  // ‖δ‖² = 6.4e-5, against an interpolated noise near σ²/2
+  RowMatrixXd prior = g.prior.rowwise() + delta;
+  const std::vector<double> variance(g.variance.size(), sigma2);
+  PilotOptions o;
+  const SurfaceSamples pilot = make_pilot_samples(g.mesh, o, 5);
+  const SamplePlan p = plan_samples(g.mesh, g.scene, pilot, prior, variance, pilot_rays(), o);
+  ASSERT_TRUE(p.screened_out) << p.screen_ratio << " +- " << p.screen_standard_error;
+  EXPECT_EQ(p.sampled_faces, 0u);
+  EXPECT_EQ(*std::max_element(p.face_weight.begin(), p.face_weight.end()), 0.0);
+  EXPECT_EQ(p.pilot_drawn, pilot.size());
+  EXPECT_EQ(p.pilot_samples, p.screen_samples);  // the rest of the pilot is not traced
+  EXPECT_EQ(p.rays, uint64_t(o.rays) * p.screen_samples);
+  ASSERT_EQ(p.holdout.size(), p.screen_samples);  // the screen's samples are the hold-out
+  double w = 0, wh2 = 0;
+  for (size_t j = 0; j < p.holdout.size(); ++j) {
+    w += p.holdout.weight[j];
+    wh2 += p.holdout.weight[j] * p.holdout.barycentric.row(static_cast<Eigen::Index>(j)).squaredNorm();
+  }
+  const double expected = delta.squaredNorm() * w / (sigma2 * wh2) - 1;
+  EXPECT_NEAR(p.screen_ratio, expected, 1e-9);
+  EXPECT_GT(p.screen_ratio, 0);
+  EXPECT_LT(p.screen_ratio + p.screen_standard_error, 1);
+
+  // Four times the error: the ratio is above 1 and the pilot goes on, finding every face off.
+  prior = g.prior.rowwise() + 2 * delta;
+  const SamplePlan on = plan_samples(g.mesh, g.scene, pilot, prior, variance, pilot_rays(), o);
+  EXPECT_FALSE(on.screened_out);
+  EXPECT_NEAR(on.screen_ratio, 4 * (expected + 1) - 1, 1e-9);
+  EXPECT_EQ(on.sampled_faces, g.mesh.num_faces());
+  // With no noise to weigh it against, nothing is screened out, whatever the ratio asked for.
+  o.screen_ratio = 1e6;
+  EXPECT_FALSE(plan_samples(g.mesh, g.scene, pilot, g.prior, g.variance, pilot_rays(), o).screened_out);
+}
+
+TEST(SamplePlan, AScreenThatLetsThePilotGoOnChangesNothingOfItsPlan) {
+  // Each pilot sample's rays are its own, whichever pass traces it: a screen that does not stop
+  // the pilot leaves the faces, the hold-out and the rays exactly as without one.
+  const Ground g(true);
+  PilotOptions off;
+  off.screen_ratio = 0;
+  const SamplePlan with = plan(g), without = plan(g, off);
+  EXPECT_FALSE(with.screened_out);
+  EXPECT_GT(with.screen_samples, 0u);
+  EXPECT_GT(with.screen_ratio, 1);  // a shadow edge across the faces
+  EXPECT_EQ(without.screen_samples, 0u);
+  EXPECT_GT(with.sampled_faces, 0u);
+  EXPECT_EQ(with.face_weight, without.face_weight);
+  EXPECT_EQ(with.pilot_samples, without.pilot_samples);
+  EXPECT_EQ(with.rays, without.rays);
+  ASSERT_EQ(with.holdout.size(), without.holdout.size());
+  EXPECT_EQ(with.holdout.values, without.holdout.values);
+  EXPECT_EQ(with.holdout.face, without.holdout.face);
+}
+
 TEST(SamplePlan, TheSameForAnyThreadCountAndRejectsWhatItCannotUse) {
   const Ground g(true);
   const SamplePlan one = plan(g, {}, 1);

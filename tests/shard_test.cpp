@@ -67,7 +67,7 @@ TEST(Shard, AnyShardCountMergesToTheOneProcessBakeBitForBit) {
     test::TempDir dir;
     int phases = 0;
     const BakeResult merged = sharded(mesh, o, n, dir.path("parts"), &phases);
-    EXPECT_EQ(phases, 3) << n;
+    EXPECT_EQ(phases, 4) << n;  // the pilot's screen, its two stages, the top-up
     expect_identical(one, merged);
   }
 }
@@ -82,9 +82,12 @@ TEST(Shard, PhasesAreTheOnesShardPhasesPromisesForEachPipeline) {
   const Case cases[] = {
       {"point values", [](BakeOptions& o) { o.fit.method = FitMethod::Point; }, 1},
       {"area samples", [](BakeOptions& o) { o.allocation = SampleAllocation::Area; }, 1},
-      {"one-stage pilot", [](BakeOptions& o) { o.pilot.first_share = 1; }, 2},
-      {"ambient occlusion", [](BakeOptions& o) { o.signal = AssetSignal::Ao; }, 3},
-      {"error target and bounces (the merge's)", [](BakeOptions& o) { o.target_error = 0.3, o.bounce.bounces = 1; }, 3},
+      {"one-stage pilot", [](BakeOptions& o) { o.pilot.first_share = 1; }, 3},
+      {"no screen", [](BakeOptions& o) { o.pilot.screen_ratio = 0; }, 3},
+      // The screen stops the pilot: its stages' phases pass with nothing traced in them.
+      {"pilot stopped by its screen", [](BakeOptions& o) { o.pilot.screen_ratio = 1e6; }, 4},
+      {"ambient occlusion", [](BakeOptions& o) { o.signal = AssetSignal::Ao; }, 4},
+      {"error target and bounces (the merge's)", [](BakeOptions& o) { o.target_error = 0.3, o.bounce.bounces = 1; }, 4},
   };
   for (const Case& c : cases) {
     BakeOptions o = small_bake();
