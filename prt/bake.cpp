@@ -894,8 +894,10 @@ void reach_bounced_target(const RayScene& scene, const RayScene& bounce_scene, c
 RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatrixXd& prior, const std::vector<double>& prior_variance,
                             const BakeOptions& o, FitStats* stats, double* alpha, std::vector<std::pair<double, double>>* trials) {
   const std::vector<double>* variance = prior_variance.size() == mesh.num_vertices() ? &prior_variance : nullptr;
+  // (Without samples — the pilot's screen stopped it, or it found no face — nothing is fitted
+  // and every α gives the same values: no trials.)
   const bool choose = o.alpha_auto && o.fit.method == FitMethod::LeastSquares && data.allocation == SampleAllocation::Pilot &&
-                      data.plan.holdout.size() > 0 && !o.alpha_choices.empty();
+                      data.plan.holdout.size() > 0 && !o.alpha_choices.empty() && data.samples.size() > 0;
   if (alpha) *alpha = o.fit.alpha;
   if (trials) trials->clear();
   if (!choose) return fit_vertex_values(mesh, data.samples, data.moments, prior, o.fit, stats, variance);

@@ -1153,6 +1153,13 @@ RowMatrixXd fit_vertex_values(const Mesh& mesh, const SurfaceSamples& s, const F
     }
     x = average_values(sums, free, prior);
     stats.seconds_assemble = clock.total();
+  } else if (s.size() == 0) {
+    // No sample (the pilot's screen stopped it, or it found no face): no vertex has a row of its
+    // own, and each keeps its (corrected) prior. Assembling the empty system would still sum over
+    // every face: a second on a 1.5M-triangle bake.
+    check_fit_inputs(mesh, s, moments, prior, o);
+    x = prior;
+    stats.unsupported = mesh.num_vertices();
   } else {
     // The system on the sampled faces' region (fit_region), or on the whole mesh. The assembly
     // checks what it is given; the region's caller checks the whole (its prior rows outside the

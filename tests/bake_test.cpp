@@ -82,6 +82,34 @@ TEST(Bake, AlphaAutoKeepsTheCandidateWhoseFitHasTheLowestHeldOutError) {
   EXPECT_EQ((a.transfer - b.transfer).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Bake, WhereThePilotsScreenStopsItTheSampleRaysGoToTheVerticesAndNothingIsFitted) {
+  // A screen asked to stop at any ratio: no face sampled, no α tried (every α would give the same
+  // values), each vertex its prior corrected by the known part alone; the rest of the pilot and
+  // the samples are not traced, and the second round of vertex rays gets at least as many rays.
+  // (This mesh is too small for that round: the pilot's floor of 4096 samples outspends what
+  // sampling every face would.)
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.transfer.rays = 64, o.transfer.threads = 1;
+  o.pilot.screen_ratio = 1e6;
+  const BakeResult a = bake(mesh, o);
+  ASSERT_TRUE(a.fit_data.plan.screened_out);
+  EXPECT_EQ(a.fit_data.plan.sampled_faces, 0u);
+  EXPECT_EQ(a.fit_data.samples.size(), 0u);
+  EXPECT_TRUE(a.alpha_trials.empty());
+  EXPECT_EQ(a.fit.unsupported, a.mesh.num_vertices());
+  FitOptions f = resolve_bake_options(o).fit;
+  EXPECT_EQ((a.transfer - fit_prior(a.mesh, a.point, f)).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(a.fit_data.plan.holdout.size(), a.fit_data.plan.screen_samples);
+  EXPECT_GT(a.predicted.samples, 0u);
+  o.pilot.screen_ratio = 0;
+  const BakeResult b = bake(mesh, o);
+  EXPECT_GT(b.fit_data.plan.sampled_faces, 0u);
+  EXPECT_GE(a.top_up.rays, b.top_up.rays);
+  EXPECT_EQ(a.fit_data.rays, uint64_t(o.pilot.rays) * a.fit_data.plan.screen_samples);
+  EXPECT_LT(a.rays, b.rays);
+}
+
 TEST(Bake, RaysPerSampleAreChosenForTheSameSampleRays) {
   // The same sample rays, split by what the pilot measures: the choice is the modelled error's
   // least, the sample rays are what the fixed 16 rays per sample spend, and on an independent

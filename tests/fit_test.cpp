@@ -938,6 +938,7 @@ TEST(Fit, TheUnshadowedCorrectionFollowsEachVertexsOpenShareWhereNoSampleReaches
     const RowMatrixXd x = fit_vertex_values(m, s, moments, share * t_u, o, &st);
     EXPECT_LT((x - share * projected).cwiseAbs().maxCoeff(), 1e-12 * projected.cwiseAbs().maxCoeff()) << "share " << share;
     EXPECT_EQ(st.unshadowed_iterations > 0, share > 0);  // nothing open, nothing to project
+    EXPECT_EQ(st.unsupported, m.num_vertices());  // no row for any vertex: nothing assembled
   }
   // RGB transfer (three blocks of 16): each channel corrected alike.
   const RowMatrixXd rgb = fit_vertex_values(m, s, FaceMoments{RowMatrixXd::Zero(3 * Eigen::Index(m.num_faces()), 48), {}},
