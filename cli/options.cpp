@@ -143,7 +143,7 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--pilot-rings", "N", "fit, pilot: each face pools the pilot samples within N vertex rings", &bake.pilot.rings, 1, 8);
   args.option("--pilot-significance", "Z", "fit, pilot: standard errors a ring's excess residual must exceed to get samples",
               &bake.pilot.significance, 0.0, 1e6);
-  args.option("--pilot-screen", "Q", "fit, pilot: first trace a few thousand pilot samples; when the signal's variation inside\n"
+  args.option("--pilot-screen", "Q", "fit, pilot: first trace up to 65,536 pilot samples; when the signal's variation inside\n"
               "the faces is below Q times the vertices' own noise there (a dense scan), stop: no fit samples,\n"
               "their rays go to the vertices; 0: off", &bake.pilot.screen_ratio, 0.0, 1e6);
 }
