@@ -60,6 +60,8 @@ Report bench_solve(const Mesh& mesh, const BakeOptions& b, int repeat) {
   r.set("seconds_fit_solve", best.seconds_solve);
   r.set("fit_solver", best.solver);
   r.set("fit_cg_iterations", best.cg_iterations);
+  r.set("fit_multigrid_levels", best.multigrid_levels);
+  r.set("fit_multigrid_operator_complexity", best.multigrid_operator_complexity);
   r.set("fit_system_nonzeros", best.system_nonzeros);
   r.set("fit_factor_nonzeros", best.factor_nonzeros);
   r.set("fit_stiff_share", best.stiff_share);

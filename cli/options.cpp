@@ -106,8 +106,10 @@ void BakeCli::add_fit(ArgParser& args) {
               {Regularizer::Edge, Regularizer::Gradient}, regularizer_name);
   args.choice("--mass", "lsq: exact mass matrix, or the samples' own", &f.mass, {MassMatrix::Analytic, MassMatrix::Sampled},
               mass_matrix_name);
-  args.choice("--solver", "lsq: conjugate gradients (analytic mass; CHOLMOD if they stall), or always a CHOLMOD\n"
-              "Cholesky factorisation", &f.solver, {FitSolver::Auto, FitSolver::Cholmod}, fit_solver_name);
+  args.choice("--solver", "lsq: chosen per system (auto), conjugate gradients on the scaled system (cg) or with a\n"
+              "multigrid preconditioner (multigrid; both need the analytic mass and fall back to CHOLMOD if\n"
+              "they stall), or always a CHOLMOD Cholesky factorisation", &f.solver,
+              {FitSolver::Auto, FitSolver::Cg, FitSolver::Multigrid, FitSolver::Cholmod}, fit_solver_name);
   args.option("--cg-tolerance", "T", "lsq: conjugate gradients stop at this residual relative to the right-hand side",
               &f.cg_tolerance, 1e-16, 1.0);
   args.flag("--no-control-variate", "lsq, analytic mass: estimate b as the paper does, without the point samples' control\n"

@@ -134,6 +134,8 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("mass", mass_matrix_name(o.mass));
   r.set("fit_solver", f.solver);
   r.set("fit_cg_iterations", f.cg_iterations);
+  r.set("fit_multigrid_levels", f.multigrid_levels);
+  r.set("fit_multigrid_operator_complexity", f.multigrid_operator_complexity);
   // What CG's iterations were: the solution, or the attempt before CHOLMOD took over.
   if (f.cg_iterations > 0) r.set("fit_cg_note", f.solver == "cg" ? "CG iterations" : "CG iterations first");
   r.set("fit_unsupported_vertices", f.unsupported);

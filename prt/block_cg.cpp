@@ -63,14 +63,14 @@ void multiply_rows(const RowSparseMatrixd& A, const double* in, double* out, Eig
 // One block CG run: the state of K columns and the three passes of an iteration.
 class Run {
  public:
-  Run(const RowSparseMatrixd& A, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o)
-      : A_(A), R_(B), X_(X), o_(o), n_(A.rows()), K_(B.cols()), blocks_{n_, K_, (n_ + kBlockRows - 1) / kBlockRows, o.threads, {}},
+  Run(const RowSparseMatrixd& A, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o, const BlockPreconditioner& m)
+      : A_(A), R_(B), X_(X), o_(o), m_(m), n_(A.rows()), K_(B.cols()), blocks_{n_, K_, (n_ + kBlockRows - 1) / kBlockRows, o.threads, {}},
         P_(n_, K_), Y_(n_, K_) {
     blocks_.partial.resize(size_t(blocks_.count * K_));
     prefer_huge_pages(P_), prefer_huge_pages(Y_);
   }
 
-  // R = B − AX, in B's place (memory is what this costs most), P = R, and the norms of B and R.
+  // R = B − AX, in B's place (memory is what this costs most), P = R (or M⁻¹R), and the norms of B and R.
   // Returns whether any column has yet to converge.
   bool start() {
     const Eigen::Index K = K_;
@@ -85,6 +85,11 @@ class Run {
         dot[i % K] += R_.data()[i] * R_.data()[i];
       }
     });
+    rz_ = rr_;
+    if (m_) {
+      rz_ = precondition();
+      P_ = Z_;
+    }
     const auto k = static_cast<size_t>(K);
     target_.resize(k), alpha_.resize(k), beta_.resize(k), active_.resize(k);
     bool any = false;
@@ -112,7 +117,7 @@ class Run {
       alpha_[c] = 0;
       if (!active_[c]) continue;
       if (!(pap[c] > 0) || !std::isfinite(pap[c])) return false;
-      alpha_[c] = rr_[c] / pap[c];
+      alpha_[c] = rz_[c] / pap[c];
     }
     std::vector<double> next = blocks_.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
       for (Eigen::Index i = f; i < l; ++i) {
@@ -127,10 +132,11 @@ class Run {
         }
       }
     });
+    const std::vector<double> next_rz = m_ ? precondition() : next;
     any = false;
     for (size_t c = 0; c < size_t(K); ++c) {
-      beta_[c] = active_[c] && rr_[c] > 0 ? next[c] / rr_[c] : 0;
-      if (active_[c]) rr_[c] = next[c];
+      beta_[c] = active_[c] && rz_[c] > 0 ? next_rz[c] / rz_[c] : 0;
+      if (active_[c]) rr_[c] = next[c], rz_[c] = next_rz[c];
       active_[c] = active_[c] && rr_[c] > target_[c];
       any |= active_[c] != 0;
     }
@@ -138,15 +144,25 @@ class Run {
     return true;
   }
 
-  // P = R + βP on the active columns.
+  // Z = M⁻¹R; returns rᵀz per column.
+  std::vector<double> precondition() {
+    const Eigen::Index K = K_;
+    m_(R_, Z_);
+    return blocks_.run([&](Eigen::Index f, Eigen::Index l, double* dot) {
+      for (Eigen::Index i = f * K; i < l * K; ++i) dot[i % K] += R_.data()[i] * Z_.data()[i];
+    });
+  }
+
+  // P = Z + βP on the active columns (Z = R without a preconditioner).
   void next_direction() {
     const Eigen::Index K = K_;
+    const RowMatrixXd& Z = m_ ? Z_ : R_;
     blocks_.run([&](Eigen::Index f, Eigen::Index l, double*) {
       for (Eigen::Index i = f; i < l; ++i) {
         double* p = P_.data() + i * K;
-        const double* r = R_.data() + i * K;
+        const double* z = Z.data() + i * K;
         for (Eigen::Index q = 0; q < K; ++q)
-          if (active_[size_t(q)]) p[q] = r[q] + beta_[size_t(q)] * p[q];
+          if (active_[size_t(q)]) p[q] = z[q] + beta_[size_t(q)] * p[q];
       }
     });
   }
@@ -174,16 +190,18 @@ class Run {
   RowMatrixXd& R_;
   RowMatrixXd& X_;
   const BlockCgOptions& o_;
+  const BlockPreconditioner& m_;
   Eigen::Index n_, K_;
   Blocks blocks_;
-  RowMatrixXd P_, Y_;
-  std::vector<double> bb_, rr_, target_, alpha_, beta_, history_;
+  RowMatrixXd P_, Y_, Z_;
+  std::vector<double> bb_, rr_, rz_, target_, alpha_, beta_, history_;
   std::vector<char> active_;
 };
 
 }  // namespace
 
-BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o) {
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o,
+                                       const BlockPreconditioner& m) {
   BlockCgResult result;
   if (A_in.rows() == 0 || B.cols() == 0) {
     result.converged = true;
@@ -194,7 +212,7 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd
   RowSparseMatrixd compressed;
   if (!A_in.isCompressed()) compressed = A_in, compressed.makeCompressed();
   const RowSparseMatrixd& A = A_in.isCompressed() ? A_in : compressed;
-  Run run(A, B, X, o);
+  Run run(A, B, X, o, m);
   bool any = run.start(), broke = false;
   while (any && result.iterations < o.max_iterations) {
     if (!run.step(any)) {

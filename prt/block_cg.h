@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/SparseCore>
+#include <functional>
 
 #include "prtsub/subdiv/mesh.h"
 
@@ -19,6 +20,9 @@ struct BlockCgOptions {
   bool predict_stall = true;
 };
 
+//! Z ≈ A⁻¹R for n by K residuals R: a symmetric positive definite operator (a multigrid cycle).
+using BlockPreconditioner = std::function<void(const RowMatrixXd& R, RowMatrixXd& Z)>;
+
 struct BlockCgResult {
   int iterations = 0;             //!< of the slowest column
   bool converged = false;         //!< every column reached the tolerance
@@ -26,14 +30,14 @@ struct BlockCgResult {
   bool predicted_stall = false;   //!< stopped early: the cap would not have been enough
 };
 
-//! Solves A X = B column by column, unpreconditioned (scale A to a unit diagonal first: that is
-//! Jacobi preconditioning). X holds the starting guess and receives the solution. Stops early
+//! Solves A X = B column by column, with the preconditioner if one is given (without one, scale A
+//! to a unit diagonal first: that is Jacobi preconditioning). X holds the starting guess and receives the solution. Stops early
 //! and reports converged = false if a column breaks down (pᵀAp ≤ 0: A is not positive definite),
 //! does not converge within max_iterations, or is predicted not to; X then holds the last
 //! finite iterate.
 //! \param A n by n, both triangles stored
 //! \param B n by K, by value: its storage becomes the residual's (move it in if you are done with it)
 BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X,
-                                       const BlockCgOptions& options = {});
+                                       const BlockCgOptions& options = {}, const BlockPreconditioner& preconditioner = {});
 
 }  // namespace prtsub

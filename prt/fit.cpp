@@ -71,6 +71,7 @@
 
 #include "prtsub/prt/block_cg.h"
 #include "prtsub/prt/huge_pages.h"
+#include "prtsub/prt/multigrid.h"
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/sh.h"
 #include "prtsub/prt/unshadowed_projection.h"
@@ -136,10 +137,14 @@ MassMatrix parse_mass_matrix(const std::string& n) {
 }
 FitSolver parse_fit_solver(const std::string& n) {
   if (n == "auto") return FitSolver::Auto;
+  if (n == "cg") return FitSolver::Cg;
+  if (n == "multigrid") return FitSolver::Multigrid;
   if (n == "cholmod") return FitSolver::Cholmod;
-  throw InputError("unknown fit solver '" + n + "' (auto, cholmod)");
+  throw InputError("unknown fit solver '" + n + "' (auto, cg, multigrid, cholmod)");
 }
-const char* fit_solver_name(FitSolver s) { return s == FitSolver::Auto ? "auto" : "cholmod"; }
+const char* fit_solver_name(FitSolver s) {
+  return s == FitSolver::Auto ? "auto" : s == FitSolver::Cg ? "cg" : s == FitSolver::Multigrid ? "multigrid" : "cholmod";
+}
 const char* non_negative_name(NonNegative n) {
   return n == NonNegative::Off ? "off" : n == NonNegative::Constant ? "constant" : "directions";
 }
@@ -727,6 +732,16 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   sys.lumped.resize(n);
   for (Eigen::Index r = 0; r < V; ++r)
     if (sys.slot[by_rank[size_t(r)]] >= 0) sys.lumped[sys.slot[by_rank[size_t(r)]]] = lumped[r];
+  {
+    // Positions relative to the mesh's centre, in units of its size: near-null vectors that stay
+    // well conditioned however far from the origin the mesh lies.
+    Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = -low;
+    for (uint32_t v : order) low = low.cwiseMin(mesh.point(v)), high = high.cwiseMax(mesh.point(v));
+    const Eigen::Vector3d centre = 0.5 * (low + high);
+    const double size = n ? std::max((high - low).maxCoeff(), DBL_MIN) : 1.0;
+    sys.points.resize(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) sys.points.row(i) = ((mesh.point(order[size_t(i)]) - centre) / size).transpose();
+  }
   parallel_range(n, o.threads, Eigen::Index(4096), [&](const tbb::blocked_range<Eigen::Index>& r) {
     for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
       double d = 0;
@@ -838,8 +853,9 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
   // crawls; such meshes (buildings) are mostly planar, and their Cholesky factor fills in little.
   // So: few stiff rows, CG; many, CHOLMOD's symbolic analysis (reused by the factorisation) and
   // CHOLMOD if its factor is small, CG (with the stall check as a last resort) if not.
-  bool iterate = n > 0 && !factored_ && options_.solver == FitSolver::Auto && options_.mass == MassMatrix::Analytic;
-  if (iterate) {
+  bool iterate = n > 0 && !factored_ && options_.solver != FitSolver::Cholmod && options_.mass == MassMatrix::Analytic;
+  bool multigrid = options_.solver == FitSolver::Multigrid;
+  if (iterate && options_.solver == FitSolver::Auto) {
     stats.stiff_share = stiff_share(sys);
     if (stats.stiff_share >= kStiffShare) {
       if (!cholesky_) analyze(stats);
@@ -852,14 +868,34 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
     RowMatrixXd y(n, K);
     for (size_t i = 0; i < slot.size(); ++i)
       if (slot[i] >= 0) y.row(slot[i]) = prior.row(static_cast<Eigen::Index>(i)) / sys.scale[slot[i]];
-    const BlockCgResult cg = block_conjugate_gradient(sys.matrix, sys.rhs, y, {options_.cg_tolerance, options_.cg_max_iterations, options_.threads});
+    BlockPreconditioner preconditioner;
+    if (multigrid) {
+      if (!multigrid_) {
+        MultigridOptions mo;
+        mo.threads = options_.threads;
+        // In the scaled unknowns y = S⁻¹x, the constant and the linear functions, which the
+        // regulariser does not penalise, are S⁻¹ times them.
+        Eigen::MatrixXd near_null(n, 4);
+        near_null.col(0).setOnes();
+        near_null.rightCols(3) = sys.points;
+        near_null = sys.scale.cwiseInverse().asDiagonal() * near_null;
+        multigrid_ = std::make_unique<Multigrid>(sys.matrix, mo, near_null);
+        stats.seconds_factor += clock.lap();
+      }
+      stats.multigrid_levels = int(multigrid_->stats().unknowns.size());
+      stats.multigrid_operator_complexity = multigrid_->stats().operator_complexity;
+      const Multigrid& mg = *multigrid_;
+      preconditioner = [&mg](const RowMatrixXd& r, RowMatrixXd& z) { mg.apply(r, z); };
+    }
+    const BlockCgResult cg = block_conjugate_gradient(sys.matrix, sys.rhs, y, {options_.cg_tolerance, options_.cg_max_iterations, options_.threads}, preconditioner);
     stats.cg_iterations = cg.iterations;
     if (cg.converged && y.allFinite()) {
       for (size_t i = 0; i < slot.size(); ++i)
         if (slot[i] >= 0) x.row(static_cast<Eigen::Index>(i)) = sys.scale[slot[i]] * y.row(slot[i]);
-      stats.solver = "cg";
-      stats.seconds_solve += clock.total();
-      stats.solve_memory_mib = (12.0 * static_cast<double>(sys.matrix.nonZeros()) + 6 * vectors_bytes) / (1024.0 * 1024.0);
+      stats.solver = multigrid ? "cg-multigrid" : "cg";
+      stats.seconds_solve += clock.lap();
+      const double hierarchy = multigrid ? multigrid_->stats().bytes + 3 * vectors_bytes : 0.0;  // + Z and a cycle's two work arrays
+      stats.solve_memory_mib = (12.0 * static_cast<double>(sys.matrix.nonZeros()) + 6 * vectors_bytes + hierarchy) / (1024.0 * 1024.0);
       if (stats_out) *stats_out = stats;
       return x;
     }

@@ -16,9 +16,11 @@ using SparseMatrixd = Eigen::SparseMatrix<double>;
 enum class FitMethod { Point, Average, LeastSquares };
 enum class Regularizer { Edge, Gradient };
 enum class MassMatrix { Analytic, Sampled };
-//! Auto: conjugate gradients with the analytic mass matrix, falling back to CHOLMOD if they do
-//! not converge; CHOLMOD's Cholesky factorisation for the sampled one. Cholmod: always CHOLMOD.
-enum class FitSolver { Auto, Cholmod };
+//! Auto: chosen per system before any iteration (FitSystemSolver). Cg: conjugate gradients with
+//! the unit diagonal's scaling; Multigrid: with a smoothed-aggregation multigrid cycle as the
+//! preconditioner; both fall back to CHOLMOD if they stall, and need the analytic mass matrix
+//! (CHOLMOD for the sampled one). Cholmod: always CHOLMOD's Cholesky factorisation.
+enum class FitSolver { Auto, Cg, Multigrid, Cholmod };
 //! What the fit may not do that the point samples never do: go negative.
 //!  - Off: nothing.
 //!  - Constant: each vertex's DC coefficient is at least 0, so no constant light (of any colour
@@ -30,12 +32,14 @@ enum class NonNegative { Off, Constant, Directions };
 FitMethod parse_fit_method(const std::string& name);        //!< point, average, lsq
 Regularizer parse_regularizer(const std::string& name);     //!< edge, gradient
 MassMatrix parse_mass_matrix(const std::string& name);      //!< analytic, sampled
-FitSolver parse_fit_solver(const std::string& name);        //!< auto, cholmod
+FitSolver parse_fit_solver(const std::string& name);        //!< auto, cg, multigrid, cholmod
 const char* fit_method_name(FitMethod m);
 const char* regularizer_name(Regularizer r);
 const char* mass_matrix_name(MassMatrix m);
 const char* fit_solver_name(FitSolver s);
 const char* non_negative_name(NonNegative n);
+
+class Multigrid;
 
 struct FitOptions {
   FitMethod method = FitMethod::LeastSquares;
@@ -75,7 +79,9 @@ struct FitStats {
   //! and CHOLMOD's symbolic analysis decides between it and CG
   double stiff_share = 0;
   size_t predicted_factor_entries = 0;  //!< that analysis's count, when it ran (0 otherwise)
-  std::string solver;              //!< "cg" or "cholmod": what produced the values
+  std::string solver;              //!< "cg", "cg-multigrid" or "cholmod": what produced the values
+  int multigrid_levels = 0;        //!< of the multigrid preconditioner (0: none)
+  double multigrid_operator_complexity = 0;  //!< its non-zeros over all levels / the system's
   int cg_iterations = 0;           //!< of the slowest column, also when CG gave up
   double solve_memory_mib = 0;     //!< system plus factor (or CG's vectors) plus right-hand sides, as stored
   double stabilizer = 0;           //!< λ of the pull towards the prior that was needed (0: none)
@@ -141,6 +147,9 @@ struct FitSystem {
   RowMatrixXd rhs;                 //!< n by K, S·b
   Eigen::VectorXd scale;           //!< n: the diagonal of S
   Eigen::VectorXd lumped;          //!< n: the lumped mass ∫h_i of each unknown (the stabiliser's weight)
+  //! n by 3: each unknown's position, relative to the mesh's centre in units of its size (the
+  //! multigrid's near-null vectors are built from them)
+  Eigen::MatrixX3d points;
   std::vector<Eigen::Index> slot;  //!< #V: a vertex's unknown, or -1 when it is fixed at the prior
 };
 
@@ -171,6 +180,7 @@ class FitSystemSolver {
  private:
   class Cholesky;
   void analyze(FitStats& stats);
+  std::unique_ptr<Multigrid> multigrid_;
   void factorize(FitStats& stats);
   const FitSystem& system_;
   FitOptions options_;
