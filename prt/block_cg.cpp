@@ -4,7 +4,8 @@
 // eigenvalues lie in [1/2, 2] on any mesh) plus α times a regulariser, so plain CG converges in
 // a few dozen iterations where a Cholesky factorisation has to fill in a 3-D mesh's separators.
 // Each iteration makes three passes over row blocks: Y = AP with pᵀAp; X, R updated with rᵀr;
-// P = R + βP. The matrix is row-major and the vectors are row-major #n by K, so a row of A
+// P = R + βP. With a preconditioner M (a multigrid cycle, multigrid.cpp), Z = M⁻¹R and rᵀz
+// come between the last two and P = Z + βP; the residual norm still decides convergence. The matrix is row-major and the vectors are row-major #n by K, so a row of A
 // reads K contiguous values per neighbour. Dot products are summed per fixed block of rows and
 // then over blocks in order: the result is the same for any number of threads.
 #include "prtsub/prt/block_cg.h"

@@ -855,8 +855,8 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
   // CHOLMOD if its factor is small, CG (with the stall check as a last resort) if not.
   bool iterate = n > 0 && !factored_ && options_.solver != FitSolver::Cholmod && options_.mass == MassMatrix::Analytic;
   bool multigrid = options_.solver == FitSolver::Multigrid;
+  if (n > 0) stats.stiff_share = stiff_share(sys);
   if (iterate && options_.solver == FitSolver::Auto) {
-    stats.stiff_share = stiff_share(sys);
     if (stats.stiff_share >= kStiffShare) {
       if (!cholesky_) analyze(stats);
       stats.predicted_factor_entries = size_t(predicted_factor_entries_);
