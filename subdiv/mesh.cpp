@@ -29,8 +29,9 @@ double triangle_area(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const E
   return 0.5 * (b - a).cross(c - a).norm();
 }
 
-EdgeCounts count_edges(const std::vector<Triangle>& triangles) {
-  const EdgeAdjacency adj = edge_adjacency(triangles);
+EdgeCounts count_edges(const std::vector<Triangle>& triangles) { return count_edges(triangles, edge_adjacency(triangles)); }
+
+EdgeCounts count_edges(const std::vector<Triangle>& triangles, const EdgeAdjacency& adj) {
   EdgeCounts counts;
   counts.edges = adj.num_edges();
   for (size_t e = 0; e < adj.num_edges(); ++e) {

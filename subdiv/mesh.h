@@ -87,11 +87,15 @@ Bounds bounds(const RowMatrixX3d& positions);
 //! Area of triangle (a, b, c).
 double triangle_area(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
+struct EdgeAdjacency;
+
 //! Edge statistics over positions: boundary, non-manifold and winding-conflict edge counts.
 struct EdgeCounts {
   size_t boundary = 0, non_manifold = 0, winding_conflicts = 0, edges = 0;
 };
 //! \param triangles #F triangles indexing positions (not render vertices)
 EdgeCounts count_edges(const std::vector<Triangle>& triangles);
+//! The same from their edge_adjacency, if the caller has it.
+EdgeCounts count_edges(const std::vector<Triangle>& triangles, const EdgeAdjacency& adjacency);
 
 }  // namespace prtsub

@@ -60,7 +60,7 @@ void fill_degenerate_groups(const RowMatrixX3d& positions, const std::vector<Tri
 
 CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
                                      const std::vector<Triangle>& triangles,
-                                     double crease_angle_deg) {
+                                     double crease_angle_deg, const EdgeAdjacency* adjacency) {
   const size_t nf = triangles.size();
   std::vector<Eigen::Vector3d> face_normal(nf);
   std::vector<std::array<double, 3>> corner_angle(nf);
@@ -79,7 +79,9 @@ CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
   }
 
   const double cos_crease = std::cos(std::clamp(crease_angle_deg, 0.0, 180.0) * M_PI / 180.0);
-  const EdgeAdjacency adj = edge_adjacency(triangles);
+  EdgeAdjacency own;
+  if (!adjacency) own = edge_adjacency(triangles);
+  const EdgeAdjacency& adj = adjacency ? *adjacency : own;
   UnionFind uf(nf * 3);
   for (size_t e = 0; e < adj.num_edges(); ++e) {
     if (adj.valence(e) != 2) continue;  // boundary and non-manifold edges are creases

@@ -8,6 +8,8 @@
 
 namespace prtsub {
 
+struct EdgeAdjacency;
+
 struct CornerNormals {
   RowMatrixX3d normals;         //!< #G by 3, one unit normal per smoothing group
   std::vector<uint32_t> group;  //!< #F*3, smoothing group of corner 3f+k
@@ -19,8 +21,9 @@ struct CornerNormals {
 //! always creases. Groups are numbered in order of their first corner.
 //! \param positions #P by 3
 //! \param triangles #F triangles indexing positions
+//! \param adjacency the triangles' edge_adjacency, if the caller has it (null: built here)
 CornerNormals compute_corner_normals(const RowMatrixX3d& positions,
                                      const std::vector<Triangle>& triangles,
-                                     double crease_angle_deg);
+                                     double crease_angle_deg, const EdgeAdjacency* adjacency = nullptr);
 
 }  // namespace prtsub

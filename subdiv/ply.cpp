@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -163,6 +164,20 @@ const PlyElement* PlyFile::element(const std::string& name) const {
 std::string read_file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path + ": cannot open file (" + std::strerror(errno) + ")");
+  // A regular file is read in one call into a string of its size: a stream copy grows its
+  // buffer by doubling and copies it out again (a tenth of a second on a 7 MB scan). Anything
+  // else (a pipe, a device) goes through the stream.
+  std::error_code ec;
+  const auto size = std::filesystem::is_regular_file(path, ec) ? std::filesystem::file_size(path, ec) : std::uintmax_t(0);
+  if (!ec && size > 0) {
+    std::string bytes(static_cast<size_t>(size), '\0');
+    in.read(bytes.data(), static_cast<std::streamsize>(size));
+    if (static_cast<std::uintmax_t>(in.gcount()) == size) return bytes;
+    if (in.bad()) throw IoError(path + ": read error");
+    // Shorter than it was a moment ago (being rewritten): what is there, through the stream.
+    in.clear();
+    in.seekg(0);
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
   if (in.bad()) throw IoError(path + ": read error");

@@ -205,6 +205,25 @@ TEST_F(MeshIo, WeldsExactPositionsIncludingSignedZero) {
   EXPECT_EQ(m.defects.boundary_edges, 4u);
 }
 
+TEST_F(MeshIo, WeldedPositionsAreNumberedInFileOrderAndRepeatsCountOnce) {
+  // Positions repeated out of order: welded positions keep the order of their first vertex in
+  // the file, whatever order the weld finds them in; a face written three times (any rotation or
+  // winding) is two duplicates; render vertices follow the faces' corners.
+  Mesh m = load_mesh(file("o.obj",
+                          "v 5 5 0\nv 0 0 0\nv 5 0 0\nv 0 0 0\nv 5 5 0\nv 0 5 0\nv 5 0 0\n"
+                          "f 1 2 3\nf 5 4 6\nf 3 1 4\nf 2 7 1\n"));
+  ASSERT_EQ(m.positions.rows(), 4);
+  EXPECT_EQ(m.positions.row(0), Eigen::RowVector3d(5, 5, 0));
+  EXPECT_EQ(m.positions.row(1), Eigen::RowVector3d(0, 0, 0));
+  EXPECT_EQ(m.positions.row(2), Eigen::RowVector3d(5, 0, 0));
+  EXPECT_EQ(m.positions.row(3), Eigen::RowVector3d(0, 5, 0));
+  EXPECT_EQ(m.defects.welded_vertices, 3u);
+  EXPECT_EQ(m.defects.duplicate_faces, 2u);  // faces 3 and 4 repeat face 1
+  EXPECT_EQ(m.vertex_position[m.triangles[0][0]], 0u);
+  EXPECT_EQ(m.vertex_position[m.triangles[0][1]], 1u);
+  EXPECT_EQ(m.vertex_position[m.triangles[1][2]], 3u);
+}
+
 TEST_F(MeshIo, ToleratedDefectsAreCounted) {
   std::string obj =
       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 9 9 9\nv 2 0 0\nv 0.5 0 0\n"
