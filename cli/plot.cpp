@@ -120,9 +120,9 @@ std::string svg_loglog(const std::vector<PlotSeries>& series, const std::string&
       o << "<text x='" << L - 5 << "' y='" << num(py(y) + 4) << "' text-anchor='end'>" << tick(y) << "</text>";
     }
   o << "<text x='" << (L + W - R) / 2 << "' y='" << H - 12 << "' text-anchor='middle'>" << html_escape(xlabel) << "</text>";
-  if (above > 0)
-    o << "<text x='" << W - R + 12 << "' y='" << H - 12 << "' font-size='11'>" << above << (above == 1 ? " point" : " points") << " above "
-      << tick(y_limit) << ": \u25B2 on the top edge</text>";
+  if (above > 0)  // two lines: one would run past the legend's column (230 px)
+    o << "<text x='" << W - R + 12 << "' y='" << H - 26 << "' font-size='11'>" << above << (above == 1 ? " point" : " points") << " above "
+      << tick(y_limit) << ":</text><text x='" << W - R + 12 << "' y='" << H - 12 << "' font-size='11'>\u25B2 on the top edge</text>";
   o << "<text transform='rotate(-90)' x='" << -(T + H - B) / 2 << "' y='18' text-anchor='middle'>" << html_escape(ylabel) << "</text>";
   std::vector<size_t> order(series.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;

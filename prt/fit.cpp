@@ -37,7 +37,10 @@
 // factor it solves instead. If CG stalls after all, or with the sampled mass (which can be
 // singular), one CHOLMOD supernodal Cholesky factorisation (AMD ordering) for all K right-hand sides. If it fails or its pivot ratio falls below 1e-7 (α = 0 with the sampled
 // mass matrix, faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
-// λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed.
+// λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed. On request (--solver multigrid),
+// CG is preconditioned by a multigrid cycle (multigrid.cpp) built from the functions the
+// regulariser does not penalise: its iterations stay flat under refinement, but on the shared
+// scenes it is slower than CG or CHOLMOD (BENCHMARKS.md), so the choice above never makes it.
 //
 // Before the solve, for shadowed transfer (FitOptions::unshadowed_order), a step the paper does
 // not have: the prior is corrected by the exact projection of the unshadowed transfer's curvature

@@ -163,7 +163,9 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& samples, c
 //! FitSolver::Auto: block conjugate gradients started at the prior (the scaled mass is well
 //! conditioned on any mesh), unless the regulariser makes the system stiff (FitStats::stiff_share)
 //! and CHOLMOD's symbolic analysis finds a small factor; chosen before any iteration. Otherwise,
-//! or if CG stalls after all: one CHOLMOD supernodal Cholesky factorisation, kept for every later solve. A singular system (α = 0 with a mass matrix that
+//! or if CG stalls after all: one CHOLMOD supernodal Cholesky factorisation, kept for every later solve.
+//! FitSolver::Cg and FitSolver::Multigrid skip the choice (the latter builds its hierarchy once and
+//! keeps it for later solves). A singular system (α = 0 with a mass matrix that
 //! cannot see a vertex) is stabilised by a pull towards the prior, λ·D(x − prior), with the
 //! smallest λ that factorises; FitStats says so. Keeps a reference to `system`.
 class FitSystemSolver {
@@ -180,8 +182,8 @@ class FitSystemSolver {
  private:
   class Cholesky;
   void analyze(FitStats& stats);
-  std::unique_ptr<Multigrid> multigrid_;
   void factorize(FitStats& stats);
+  std::unique_ptr<Multigrid> multigrid_;  // FitSolver::Multigrid's hierarchy, built at the first solve
   const FitSystem& system_;
   FitOptions options_;
   std::unique_ptr<Cholesky> cholesky_;

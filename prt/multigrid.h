@@ -17,7 +17,8 @@ struct MultigridOptions {
   Eigen::Index coarsest = 2000;
   int max_levels = 12;
   //! j is a strong neighbour of i when |a_ij| ≥ strength · √(a_ii a_jj); only strong neighbours
-  //! join an aggregate.
+  //! join an aggregate. 0 (every neighbour): the fit's scaled rows have many small couplings, and
+  //! a threshold such as the textbook's 0.08 leaves too few strong ones for the levels to shrink.
   double strength = 0.0;
   int smoothing_steps = 1;  //!< damped Jacobi steps before and after each coarse correction
   int threads = 0;          //!< 0: every core; the result does not depend on it
@@ -46,7 +47,8 @@ class Multigrid {
   Multigrid& operator=(const Multigrid&) = delete;
 
   //! Z = one symmetric V-cycle applied to each column of R (n by K): Z ≈ A⁻¹R. As an operator
-  //! it is symmetric positive definite, so CG may use it as its preconditioner.
+  //! it is symmetric positive definite, so CG may use it as its preconditioner. Not for two
+  //! callers at once: the levels' work arrays are kept between calls (each call uses every core).
   void apply(const RowMatrixXd& R, RowMatrixXd& Z) const;
   const MultigridStats& stats() const { return stats_; }
 
