@@ -18,6 +18,23 @@
 #include <vector>
 
 namespace prtsub {
+
+void multiply_sparse_rows(const RowSparseMatrixd& A, const double* in, double* out, Eigen::Index K, Eigen::Index first,
+                          Eigen::Index last, bool accumulate) {
+  const auto* outer = A.outerIndexPtr();
+  const auto* inner = A.innerIndexPtr();
+  const double* value = A.valuePtr();
+  for (Eigen::Index i = first; i < last; ++i) {
+    double* o = out + i * K;
+    if (!accumulate) std::fill(o, o + K, 0.0);
+    for (auto k = outer[i]; k < outer[i + 1]; ++k) {
+      const double v = value[k];
+      const double* p = in + Eigen::Index(inner[k]) * K;
+      for (Eigen::Index q = 0; q < K; ++q) o[q] += v * p[q];
+    }
+  }
+}
+
 namespace {
 
 constexpr Eigen::Index kBlockRows = 1024;
@@ -45,20 +62,8 @@ struct Blocks {
 // out = A·in for rows first..last-1; dot[q] += Σ in(i,q)·out(i,q) over those rows.
 void multiply_rows(const RowSparseMatrixd& A, const double* in, double* out, Eigen::Index K, Eigen::Index first,
                    Eigen::Index last, double* dot) {
-  const auto* outer = A.outerIndexPtr();
-  const auto* inner = A.innerIndexPtr();
-  const double* value = A.valuePtr();
-  for (Eigen::Index i = first; i < last; ++i) {
-    double* o = out + i * K;
-    std::fill(o, o + K, 0.0);
-    for (auto k = outer[i]; k < outer[i + 1]; ++k) {
-      const double v = value[k];
-      const double* p = in + Eigen::Index(inner[k]) * K;
-      for (Eigen::Index q = 0; q < K; ++q) o[q] += v * p[q];
-    }
-    const double* p = in + i * K;
-    for (Eigen::Index q = 0; q < K; ++q) dot[q] += p[q] * o[q];
-  }
+  multiply_sparse_rows(A, in, out, K, first, last);
+  for (Eigen::Index i = first * K; i < last * K; ++i) dot[i % K] += in[i] * out[i];
 }
 
 // One block CG run: the state of K columns and the three passes of an iteration.

@@ -20,6 +20,11 @@ struct BlockCgOptions {
   bool predict_stall = true;
 };
 
+//! Rows first..last−1 of A·in into out (or added to it), for row-major blocks of K columns:
+//! the pass over the matrix that block CG and the multigrid cycle share.
+void multiply_sparse_rows(const RowSparseMatrixd& A, const double* in, double* out, Eigen::Index K, Eigen::Index first,
+                          Eigen::Index last, bool accumulate = false);
+
 //! Z ≈ A⁻¹R for n by K residuals R: a symmetric positive definite operator (a multigrid cycle).
 using BlockPreconditioner = std::function<void(const RowMatrixXd& R, RowMatrixXd& Z)>;
 

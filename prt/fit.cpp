@@ -735,9 +735,9 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& s, const F
   sys.lumped.resize(n);
   for (Eigen::Index r = 0; r < V; ++r)
     if (sys.slot[by_rank[size_t(r)]] >= 0) sys.lumped[sys.slot[by_rank[size_t(r)]]] = lumped[r];
-  {
+  if (o.solver == FitSolver::Multigrid) {
     // Positions relative to the mesh's centre, in units of its size: near-null vectors that stay
-    // well conditioned however far from the origin the mesh lies.
+    // well conditioned however far from the origin the mesh lies. Only the multigrid reads them.
     Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = -low;
     for (uint32_t v : order) low = low.cwiseMin(mesh.point(v)), high = high.cwiseMax(mesh.point(v));
     const Eigen::Vector3d centre = 0.5 * (low + high);
@@ -878,9 +878,11 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
         mo.threads = options_.threads;
         // In the scaled unknowns y = S⁻¹x, the constant and the linear functions, which the
         // regulariser does not penalise, are S⁻¹ times them.
-        Eigen::MatrixXd near_null(n, 4);
+        // (A system assembled for another solver has no positions: the constant alone.)
+        const bool linear = sys.points.rows() == n;
+        Eigen::MatrixXd near_null(n, linear ? 4 : 1);
         near_null.col(0).setOnes();
-        near_null.rightCols(3) = sys.points;
+        if (linear) near_null.rightCols(3) = sys.points;
         near_null = sys.scale.cwiseInverse().asDiagonal() * near_null;
         multigrid_ = std::make_unique<Multigrid>(sys.matrix, mo, near_null);
         stats.seconds_factor += clock.lap();

@@ -147,8 +147,8 @@ struct FitSystem {
   RowMatrixXd rhs;                 //!< n by K, S·b
   Eigen::VectorXd scale;           //!< n: the diagonal of S
   Eigen::VectorXd lumped;          //!< n: the lumped mass ∫h_i of each unknown (the stabiliser's weight)
-  //! n by 3: each unknown's position, relative to the mesh's centre in units of its size (the
-  //! multigrid's near-null vectors are built from them)
+  //! n by 3 with FitSolver::Multigrid (else empty): each unknown's position, relative to the
+  //! mesh's centre in units of its size; the multigrid's near-null vectors are built from them
   Eigen::MatrixX3d points;
   std::vector<Eigen::Index> slot;  //!< #V: a vertex's unknown, or -1 when it is fixed at the prior
 };

@@ -61,28 +61,9 @@ constexpr Eigen::Index kGrain = 2048;
 void multiply(const RowSparseMatrixd& M, const RowMatrixXd& in, RowMatrixXd& out, int threads, bool accumulate = false) {
   const Eigen::Index K = in.cols();
   if (!accumulate && (out.rows() != M.rows() || out.cols() != K)) out.resize(M.rows(), K), prefer_huge_pages(out);
-  const auto* outer = M.outerIndexPtr();
-  const auto* inner = M.innerIndexPtr();
-  const double* value = M.valuePtr();
   parallel_range(M.rows(), threads, kGrain, [&](const tbb::blocked_range<Eigen::Index>& r) {
-    for (Eigen::Index i = r.begin(); i < r.end(); ++i) {
-      double* o = out.data() + i * K;
-      if (!accumulate) std::fill(o, o + K, 0.0);
-      for (auto k = outer[i]; k < outer[i + 1]; ++k) {
-        const double v = value[k];
-        const double* p = in.data() + Eigen::Index(inner[k]) * K;
-        for (Eigen::Index q = 0; q < K; ++q) o[q] += v * p[q];
-      }
-    }
+    multiply_sparse_rows(M, in.data(), out.data(), K, r.begin(), r.end(), accumulate);
   });
-}
-
-Eigen::VectorXd diagonal(const RowSparseMatrixd& A) {
-  Eigen::VectorXd d = Eigen::VectorXd::Zero(A.rows());
-  for (Eigen::Index i = 0; i < A.rows(); ++i)
-    for (RowSparseMatrixd::InnerIterator it(A, i); it; ++it)
-      if (it.col() == i) d[i] = it.value();
-  return d;
 }
 
 // ρ(D⁻¹A) by power iteration from a fixed start: D⁻¹A is similar to D^-½AD^-½, whose largest
@@ -230,7 +211,7 @@ Multigrid::Multigrid(const RowSparseMatrixd& A, const MultigridOptions& options,
   for (;;) {
     Level& level = levels_.back();
     const RowSparseMatrixd& M = *level.A;
-    const Eigen::VectorXd d = diagonal(M);
+    const Eigen::VectorXd d = M.diagonal();
     if (!(d.minCoeff() > 0)) throw SolverError("multigrid: the matrix has a non-positive diagonal");
     const double omega = 4.0 / (3.0 * spectral_radius(M, d));
     level.inverse_diagonal = omega * d.cwiseInverse();
