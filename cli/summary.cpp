@@ -285,11 +285,12 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     r.set("target_sample_rays", res.target_sample_rays);
     r.set("target_sample_rounds", res.target_sample_rounds);
     r.set("seconds_target", res.seconds_target);
+    r.set("target_holdout_rays", res.target_holdout_rays);
+    r.set("holdout_rays_per_sample", res.fit_data.plan.holdout.rays);
     if (res.predicted_direct.samples > 0) {
       r.set("predicted_direct_error_percent", res.predicted_direct.percent);
       r.set("target_bounce_rounds", res.target_bounce_rounds);
       r.set("target_direct_rounds", res.target_direct_rounds);
-      r.set("target_holdout_rays", res.target_holdout_rays);
     }
     if (res.first_round.rays > 0) {
       r.set("target_first_round_rays", res.first_round.rays);
@@ -424,7 +425,8 @@ void print_bake_summary(const Report& r) {
     r.print(stdout, {"              target {target_error_percent}%: first round {target_first_round_rays} rays per vertex (a pilot of "
                      "{target_first_round_points} vertices predicts noise R^-{target_first_round_decay:2}, at 32-256: {target_first_round_noise})",
                      "              target {target_error_percent}%: {target_rays} more vertex rays in {target_rounds} rounds, "
-                     "{target_samples} more samples in {target_sample_rounds} ({seconds_target:3} s)"});
+                     "{target_samples} more samples in {target_sample_rounds}, the hold-out at {holdout_rays_per_sample} rays per sample "
+                     "({target_holdout_rays} rays; {seconds_target:3} s)"});
   if (r.has("predicted_direct_error_percent"))
     r.print(stdout, {"              with bounces: the direct light's error {predicted_direct_error_percent:3}%; the bounced error above is "
                      "measured against paths traced from the held-out samples ({target_holdout_rays} rays with the passes' noise); bounce "

@@ -202,7 +202,9 @@ struct BakeResult {
   int bounce_rays_chosen = 0;       //!< ... as first run: with --error, fewer than the direct light's where the target leaves room
   int target_bounce_rounds = 0;     //!< --error with bounces: bounce passes run again with more rays ...
   int target_direct_rounds = 0;     //!< ... or after more direct vertex rays
-  uint64_t target_holdout_rays = 0;  //!< --error with bounces: rays spent measuring (the held-out samples' paths, the passes' noise)
+  //! --error: rays spent measuring: the held-out samples traced again for a sharper estimate, and
+  //! with bounces the held-out samples' paths and the passes' noise
+  uint64_t target_holdout_rays = 0;
   FitStats fit;
   double alpha = 0;  //!< the fit's regulariser weight as used (chosen, with alpha_auto)
   //! alpha_auto: each candidate α and the held-out error of its fit, in percent (empty otherwise)

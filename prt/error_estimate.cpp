@@ -16,6 +16,7 @@
 #include <cmath>
 
 #include "prtsub/prt/evaluate.h"
+#include "prtsub/prt/surface_samples.h"
 #include "prtsub/subdiv/exceptions.h"
 
 namespace prtsub {
@@ -30,6 +31,18 @@ int value_channels(Eigen::Index columns) {
   if (square(columns)) return 1;
   if (columns % 3 == 0 && square(columns / 3)) return 3;  // 3·N² is never a square
   throw InputError("hold-out error: " + std::to_string(columns) + " values per point are neither N² nor 3·N²");
+}
+
+// The held-out samples' points, normals and ray offsets, as the pilot placed them.
+void holdout_points(const Mesh& mesh, const Holdout& h, const char* what, RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d& offsets) {
+  const auto n = static_cast<Eigen::Index>(h.size());
+  points.resize(n, 3), normals.resize(n, 3), offsets.resize(n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const uint32_t f = h.face[static_cast<size_t>(k)];
+    if (f >= mesh.num_faces()) throw InputError(std::string(what) + ": a sample's face is not on the mesh");
+    const SurfacePoint p = surface_point(mesh, f, h.barycentric.row(k).transpose());
+    points.row(k) = p.point.transpose(), normals.row(k) = p.normal.transpose(), offsets.row(k) = p.offset.transpose();
+  }
 }
 
 }  // namespace
@@ -93,6 +106,7 @@ Holdout holdout_subset(const Holdout& h, size_t count) {
   if (count == 0 || h.size() <= count) return h;
   const size_t stride = (h.size() + count - 1) / count;
   Holdout out;
+  out.rays = h.rays;
   const auto n = static_cast<Eigen::Index>((h.size() + stride - 1) / stride);
   out.barycentric.resize(n, 3);
   out.values.resize(n, h.values.cols());
@@ -104,27 +118,45 @@ Holdout holdout_subset(const Holdout& h, size_t count) {
   return out;
 }
 
+Holdout sharpen_holdout(const Mesh& mesh, const RayScene& scene, const Holdout& h, const TransferOptions& o, TransferStats* stats,
+                        const ProgressFn& progress) {
+  const auto n = static_cast<Eigen::Index>(h.size());
+  if (h.barycentric.rows() != n || h.values.rows() != n || h.variance.size() != h.size() || h.weight.size() != h.size())
+    throw InputError("sharpen hold-out: the samples' arrays differ in length");
+  if (h.rays <= 0) throw InputError("sharpen hold-out: the samples' values are not shadowed transfer traced with a known ray count");
+  if (o.rays < 1) throw InputError("sharpen hold-out: at least one more ray per sample");
+  if (h.values.cols() != o.order * o.order) throw InputError("sharpen hold-out: the values' order does not match the rays'");
+  RowMatrixX3d points, normals, offsets;
+  holdout_points(mesh, h, "sharpen hold-out", points, normals, offsets);
+  std::vector<double> variance;
+  const RowMatrixXd more = shadowed_transfer(scene, points, normals, o, stats, progress, &offsets, &variance);
+  // Two independent unbiased estimates, weighted by their rays: still unbiased, and still
+  // independent of the asset. (Inverse-variance weights would be closer to optimal, but weights
+  // read from the estimates' own noise would correlate with it.)
+  const double a = double(h.rays) / double(h.rays + o.rays), b = 1 - a;
+  Holdout out = h;
+  out.rays = h.rays + o.rays;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto i = static_cast<size_t>(k);
+    out.values.row(k) = (a * h.values.row(k).cast<double>() + b * more.row(k)).cast<float>();
+    out.variance[i] = a * a * h.variance[i] + b * b * variance[i];
+  }
+  return out;
+}
+
 Holdout bounced_holdout(const Mesh& mesh, const RayScene& scene, const Holdout& h, const PathOptions& o, TransferStats* stats) {
   const auto n = static_cast<Eigen::Index>(h.size());
   if (h.barycentric.rows() != n || h.values.rows() != n || h.variance.size() != h.size())
     throw InputError("bounced hold-out: the samples' arrays differ in length");
-  RowMatrixX3d points(n, 3), normals(n, 3);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const uint32_t f = h.face[static_cast<size_t>(k)];
-    if (f >= mesh.num_faces()) throw InputError("bounced hold-out: a sample's face is not on the mesh");
-    const Triangle& t = mesh.triangles[f];
-    Eigen::Vector3d p = Eigen::Vector3d::Zero(), nrm = Eigen::Vector3d::Zero();
-    for (int c = 0; c < 3; ++c) p += h.barycentric(k, c) * mesh.point(t[c]), nrm += h.barycentric(k, c) * mesh.normals.row(t[c]).transpose();
-    if (!(nrm.norm() > 1e-12)) nrm = (mesh.point(t[1]) - mesh.point(t[0])).cross(mesh.point(t[2]) - mesh.point(t[0]));
-    if (!(nrm.norm() > 0)) nrm = Eigen::Vector3d::UnitZ();
-    points.row(k) = p.transpose(), normals.row(k) = nrm.normalized().transpose();
-  }
+  RowMatrixX3d points, normals, offsets;
+  holdout_points(mesh, h, "bounced hold-out", points, normals, offsets);
   const RowMatrixX3d corners = vertex_positions(mesh);
   const PathSurface surface{corners, mesh.normals, mesh.triangles};
   std::vector<double> variance;
   const RowMatrixXd bounced = path_traced_transfer(scene, surface, points, normals, o, &variance, stats);
   const int channels = o.colour ? 3 : 1;
   Holdout out = h;
+  out.rays = 0;  // no longer shadowed transfer alone
   out.values = (h.values.cast<double>().replicate(1, channels) + bounced).cast<float>();
   for (size_t k = 0; k < h.size(); ++k) out.variance[k] = channels * h.variance[k] + variance[k];
   return out;

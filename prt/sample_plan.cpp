@@ -152,6 +152,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
   held.face.resize(n_held), held.weight.resize(n_held), held.variance.resize(n_held);
   held.barycentric.resize(static_cast<Eigen::Index>(n_held), 3);
   held.values.resize(static_cast<Eigen::Index>(n_held), K);
+  held.rays = to.rays;
   std::vector<size_t> slot(S, SIZE_MAX);  // each held-out sample's row
   for (size_t h = 0; h < n_held; ++h) slot[first[h * stride]] = h;
   // The pilot samples `which`: their points, normals and offsets, row by row.
@@ -270,6 +271,7 @@ SamplePlan plan_samples(const Mesh& mesh, const RayScene& scene, const SurfaceSa
     if (sv > 0 && plan.screen_ratio < o.screen_ratio) {
       plan.screened_out = true;
       Holdout kept;  // the screen's rows of the hold-out, in order
+      kept.rays = held.rays;
       kept.face.reserve(screen.size()), kept.weight.reserve(screen.size()), kept.variance.reserve(screen.size());
       kept.barycentric.resize(static_cast<Eigen::Index>(screen.size()), 3);
       kept.values.resize(static_cast<Eigen::Index>(screen.size()), K);

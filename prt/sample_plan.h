@@ -101,6 +101,9 @@ struct Holdout {
   std::vector<double> weight;   //!< each sample's area weight (its face's area over its count)
   std::vector<double> variance;  //!< each value's estimated variance, summed over its K values
   Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values;  //!< n by K
+  //! rays each value was traced with (every sample the same); 0 where the values are not
+  //! shadowed transfer alone (bounced_holdout's), which sharpen_holdout cannot trace more of
+  int rays = 0;
   size_t size() const { return face.size(); }
 };
 

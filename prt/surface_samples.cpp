@@ -16,6 +16,19 @@
 
 namespace prtsub {
 
+SurfacePoint surface_point(const Mesh& mesh, size_t face, const Eigen::Vector3d& w) {
+  const Triangle& t = mesh.triangles[face];
+  const Eigen::Vector3d a = mesh.point(t[0]), b = mesh.point(t[1]), c = mesh.point(t[2]);
+  Eigen::Vector3d face_normal = (b - a).cross(c - a);
+  face_normal = face_normal.norm() > 0 ? Eigen::Vector3d(face_normal.normalized()) : Eigen::Vector3d::UnitZ();
+  SurfacePoint p;
+  p.point = w[0] * a + w[1] * b + w[2] * c;
+  const Eigen::Vector3d n = w[0] * mesh.normals.row(t[0]) + w[1] * mesh.normals.row(t[1]) + w[2] * mesh.normals.row(t[2]);
+  p.normal = n.norm() > 1e-12 ? Eigen::Vector3d(n.normalized()) : face_normal;
+  p.offset = face_normal.dot(p.normal) >= 0 ? face_normal : Eigen::Vector3d(-face_normal);
+  return p;
+}
+
 SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o) {
   return make_surface_samples(mesh, o, std::vector<double>());
 }
@@ -78,10 +91,6 @@ SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o, co
   const double golden = 0.6180339887498949;
   for (size_t f = 0; f < F; ++f) {
     if (count[f] == 0) continue;
-    const Triangle& t = mesh.triangles[f];
-    const Eigen::Vector3d a = mesh.point(t[0]), b = mesh.point(t[1]), c = mesh.point(t[2]);
-    Eigen::Vector3d face_normal = (b - a).cross(c - a);
-    face_normal = face_normal.norm() > 0 ? Eigen::Vector3d(face_normal.normalized()) : Eigen::Vector3d::UnitZ();
     Rng rng(o.seed, 1 + f);
     const double su = rng.uniform(), sv = rng.uniform();
     for (size_t k = 0; k < count[f]; ++k) {
@@ -94,13 +103,8 @@ SurfaceSamples make_surface_samples(const Mesh& mesh, const SampleOptions& o, co
       s.face[j] = static_cast<uint32_t>(f);
       s.weight[j] = area[f] / static_cast<double>(count[f]);
       s.barycentric.row(i) = w.transpose();
-      s.points.row(i) = (w[0] * a + w[1] * b + w[2] * c).transpose();
-      Eigen::Vector3d nrm = w[0] * mesh.normals.row(t[0]) + w[1] * mesh.normals.row(t[1]) + w[2] * mesh.normals.row(t[2]);
-      nrm = nrm.norm() > 1e-12 ? Eigen::Vector3d(nrm.normalized()) : face_normal;
-      s.normals.row(i) = nrm.transpose();
-      // Inside a flat face, leaving along the face's own normal (to the shading side) can never
-      // start a ray behind a neighbouring face, unlike an interpolated vertex direction.
-      s.offsets.row(i) = (face_normal.dot(nrm) >= 0 ? face_normal : Eigen::Vector3d(-face_normal)).transpose();
+      const SurfacePoint at = surface_point(mesh, f, w);
+      s.points.row(i) = at.point.transpose(), s.normals.row(i) = at.normal.transpose(), s.offsets.row(i) = at.offset.transpose();
     }
   }
   return s;

@@ -33,6 +33,15 @@ struct SurfaceSamples {
   size_t size() const { return face.size(); }
 };
 
+//! The point at barycentric weights `w` of face f, as every sample is placed: its position, the
+//! corners' normals interpolated and normalised (the face's own normal where they cancel), and
+//! the direction its rays leave the surface along (the face's normal, turned to the shading
+//! side: inside a flat face it can never start a ray behind a neighbouring face).
+struct SurfacePoint {
+  Eigen::Vector3d point, normal, offset;
+};
+SurfacePoint surface_point(const Mesh& mesh, size_t face, const Eigen::Vector3d& w);
+
 //! Each face of positive area gets min_per_triangle samples; the rest of the total is shared
 //! in proportion to area by systematic sampling of the cumulative area (one seeded offset).
 //! Within a face, n samples form a randomly shifted rank-1 lattice warped onto the triangle,

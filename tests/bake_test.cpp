@@ -249,7 +249,10 @@ TEST(Bake, AnErrorTargetThatInterpolationHoldsUpGivesTheFitMoreSamples) {
   EXPECT_GE(more.target_sample_rounds, 1);
   EXPECT_GT(more.target_samples, 3 * plain.fit_data.samples.size() - 1);  // the first round triples them
   EXPECT_EQ(more.fit_data.samples.size(), plain.fit_data.samples.size() + more.target_samples);
-  EXPECT_EQ(more.rays, plain.rays + more.target_rays + more.target_sample_rays);
+  EXPECT_EQ(more.rays, plain.rays + more.target_rays + more.target_sample_rays + more.target_holdout_rays);
+  // Rays that sharpened the hold-out (if its standard error asked for them) are whole passes over it.
+  const Holdout& held = more.fit_data.plan.holdout;
+  EXPECT_EQ(more.target_holdout_rays, uint64_t(held.rays - o.pilot.rays) * held.size());
   EXPECT_EQ(more.target_sample_rays, uint64_t(o.sample_rays) * more.target_samples);
   EXPECT_LT(more.predicted.percent, plain.predicted.percent);
   // Judged independently, on a reference of its own: the asset is better, not just its estimate.
@@ -264,6 +267,37 @@ TEST(Bake, AnErrorTargetThatInterpolationHoldsUpGivesTheFitMoreSamples) {
   o.transfer.threads = 1;
   const BakeResult one = bake(mesh, o);
   EXPECT_EQ((one.transfer - more.transfer).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Bake, AnErrorTargetTracesANoisyHoldOutAgainUntilItsMeasureIsSharp) {
+  // A small hold-out at 4 rays per sample: the estimate's standard error is a large share of it.
+  // A loose target is met at once, and the hold-out is traced again (more rays per sample, the
+  // same samples) until the standard error is at most 8% of the estimate, which an independent
+  // reference then confirms within three of them.
+  const Mesh mesh = sphere_on_plane();
+  BakeOptions o;
+  o.transfer.rays = 64, o.pilot.rays = 4, o.pilot.holdout = 400;
+  const BakeResult plain = bake(mesh, o);
+  ASSERT_EQ(plain.fit_data.plan.holdout.rays, 4);
+  o.target_error = 2 * plain.predicted.percent + 1;
+  const BakeResult r = bake(mesh, o);
+  const Holdout& held = r.fit_data.plan.holdout;
+  std::printf("hold-out of %zu samples: %.3f%% +- %.3f%% at 4 rays, %.3f%% +- %.3f%% at %d\n", held.size(), plain.predicted.percent,
+              plain.predicted.standard_error, r.predicted.percent, r.predicted.standard_error, held.rays);
+  ASSERT_GT(plain.predicted.standard_error, 0.08 * plain.predicted.percent);  // else this tests nothing
+  EXPECT_GT(held.rays, 4);
+  EXPECT_EQ(held.rays % 4, 0);
+  EXPECT_LE(r.predicted.standard_error, 0.08 * r.predicted.percent);
+  EXPECT_EQ(r.target_holdout_rays, uint64_t(held.rays - 4) * held.size());
+  EXPECT_EQ(r.rays, plain.rays + r.target_holdout_rays);
+  EXPECT_EQ((r.transfer - plain.transfer).cwiseAbs().maxCoeff(), 0.0);  // measured, not changed
+  const RayScene scene(mesh.positions, position_triangles(mesh));
+  ReferenceOptions ro;
+  ro.points = 4000, ro.rays = 1024;
+  const Reference ref = make_reference(mesh, scene, ro);
+  const double e = evaluate(ref, vertex_positions(r.mesh), r.mesh.triangles, r.mesh.source_face, r.transfer).rms_percent;
+  const double clean = std::sqrt(std::max(0.0, e * e - ref.noise_floor * ref.noise_floor));
+  EXPECT_NEAR(clean, r.predicted.percent, 3 * r.predicted.standard_error + 0.05 * clean) << e;
 }
 
 TEST(Bake, WithBouncesAnErrorTargetIsMeasuredOnTheBouncedAssetAndEvalAgrees) {
