@@ -54,19 +54,18 @@ constexpr uint64_t kBounceSeed = 0xB0B0CE5EEDull;
 // The R rays of a point (normal n, leaving along `away`, lattice shifted by its stream), in ray
 // order, as one stream for rtcIntersect1M (they share an origin), and their directions.
 void point_rays(const RayScene& scene, const Eigen::Vector3d& point, const Eigen::Vector3d& n, const Eigen::Vector3d& away,
-                const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint64_t stream, std::vector<RTCRayHit>& rays,
+                const LatticeTable& lattice, uint32_t R, uint64_t seed, uint64_t stream, std::vector<RTCRayHit>& rays,
                 std::vector<Eigen::Vector3d>& dirs) {
   Eigen::Vector3d t, b;
   tangent_frame(n, t, b);
   const Eigen::Vector3f local = scene.to_local(point);
   const Eigen::Vector3f origin = local + scene.ray_offset(local) * away.cast<float>();
   Rng rng(mix64(seed ^ kBounceSeed), stream);
-  const double shift[2] = {rng.uniform(), rng.uniform()};
+  const double shift_u = rng.uniform(), shift_v = rng.uniform();
+  const LatticeShift shift(shift_u, shift_v);
   rays.resize(R), dirs.resize(R);
   for (uint32_t k = 0; k < R; ++k) {
-    const Eigen::Vector2d uv = doubling_lattice_point(k, R, generators);
-    const double u = uv.x() + shift[0], v = uv.y() + shift[1];
-    const Eigen::Vector3d d = cosine_direction(u - std::floor(u), v - std::floor(v));
+    const Eigen::Vector3d d = shifted_direction(lattice, k, shift);
     dirs[k] = (d.x() * t + d.y() * b + d.z() * n).normalized();
     init_occlusion_ray(rays[k].ray, origin, dirs[k].cast<float>());
     rays[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -74,9 +73,9 @@ void point_rays(const RayScene& scene, const Eigen::Vector3d& point, const Eigen
   }
 }
 
-void vertex_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<uint32_t>& generators,
+void vertex_rays(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const LatticeTable& lattice,
                  uint32_t R, uint64_t seed, uint32_t i, std::vector<RTCRayHit>& rays, std::vector<Eigen::Vector3d>& dirs) {
-  point_rays(scene, mesh.point(i), mesh.normals.row(i).transpose(), offsets.row(i).transpose(), generators, R, seed, i, rays, dirs);
+  point_rays(scene, mesh.point(i), mesh.normals.row(i).transpose(), offsets.row(i).transpose(), lattice, R, seed, i, rays, dirs);
 }
 
 void intersect(const RayScene& scene, std::vector<RTCRayHit>& rays) {
@@ -100,10 +99,10 @@ void classify(const std::vector<RTCRayHit>& rays, const std::vector<Eigen::Vecto
 
 // The R hits of vertex i, in ray order.
 void trace_vertex(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& offsets, const std::vector<Eigen::Vector3d>& face_normal,
-                  const std::vector<uint32_t>& generators, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
+                  const LatticeTable& lattice, uint32_t R, uint64_t seed, uint32_t i, Hit* out) {
   thread_local std::vector<RTCRayHit> rays;
   thread_local std::vector<Eigen::Vector3d> dirs;
-  vertex_rays(mesh, scene, offsets, generators, R, seed, i, rays, dirs);
+  vertex_rays(mesh, scene, offsets, lattice, R, seed, i, rays, dirs);
   intersect(scene, rays);
   classify(rays, dirs, face_normal, out);
 }
@@ -170,7 +169,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
     return total;
   }
   const auto R = static_cast<uint32_t>(o.rays);
-  const std::vector<uint32_t> generators = doubling_generators(R, 0);
+  const LatticeTable lattice = lattice_table(0, R, R, doubling_generators(R, 0));
   const RowMatrixX3d offsets = vertex_offset_directions(mesh);
   const std::vector<Eigen::Vector3d> face_normal = face_normals(mesh);
   const double cache_mib = double(V) * R * sizeof(Hit) / (1024.0 * 1024.0);
@@ -180,7 +179,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
   if (s.cached) {
     parallel_range<size_t>(V, o.threads, 16, [&](const tbb::blocked_range<size_t>& range) {
       for (size_t i = range.begin(); i != range.end(); ++i)
-        trace_vertex(mesh, scene, offsets, face_normal, generators, R, o.seed, static_cast<uint32_t>(i), &cache[i * R]);
+        trace_vertex(mesh, scene, offsets, face_normal, lattice, R, o.seed, static_cast<uint32_t>(i), &cache[i * R]);
     });
     scene.check("tracing bounce rays");
     s.rays += uint64_t(V) * R;
@@ -200,7 +199,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
       Eigen::RowVectorXd sum(K);
       for (size_t i = range.begin(); i != range.end(); ++i) {
         const Hit* hits = s.cached ? &cache[i * R] : own.data();
-        if (!s.cached) trace_vertex(mesh, scene, offsets, face_normal, generators, R, o.seed, static_cast<uint32_t>(i), own.data());
+        if (!s.cached) trace_vertex(mesh, scene, offsets, face_normal, lattice, R, o.seed, static_cast<uint32_t>(i), own.data());
         gather(mesh, previous, hits, R, o, sum);
         next.row(static_cast<Eigen::Index>(i)) = sum;
       }
@@ -229,7 +228,7 @@ RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatr
   check_colour(mesh, values, o, "gather");
   const Stopwatch clock;
   const auto R = static_cast<uint32_t>(o.rays);
-  const std::vector<uint32_t> generators = doubling_generators(R, 0);
+  const LatticeTable lattice = lattice_table(0, R, R, doubling_generators(R, 0));
   const std::vector<Eigen::Vector3d> face_normal = face_normals(mesh);
   RowMatrixXd out(points.rows(), values.cols());
   parallel_range<Eigen::Index>(points.rows(), o.threads, 16, [&](const tbb::blocked_range<Eigen::Index>& range) {
@@ -238,7 +237,7 @@ RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatr
     std::vector<Hit> hits(R);
     Eigen::RowVectorXd sum(values.cols());
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {
-      point_rays(scene, points.row(i).transpose(), normals.row(i).transpose(), offsets.row(i).transpose(), generators, R, o.seed,
+      point_rays(scene, points.row(i).transpose(), normals.row(i).transpose(), offsets.row(i).transpose(), lattice, R, o.seed,
                  static_cast<uint64_t>(i), rays, dirs);
       intersect(scene, rays);
       classify(rays, dirs, face_normal, hits.data());
@@ -306,7 +305,7 @@ double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& 
 uint64_t bare_bounce_loop(const Mesh& mesh, const RayScene& scene, const BounceOptions& o, TransferStats* stats) {
   check_bounce_options(o);
   const auto R = static_cast<uint32_t>(o.rays);
-  const std::vector<uint32_t> generators = doubling_generators(R, 0);
+  const LatticeTable lattice = lattice_table(0, R, R, doubling_generators(R, 0));
   const RowMatrixX3d offsets = vertex_offset_directions(mesh);
   std::atomic<uint64_t> hits{0};
   const Stopwatch clock;
@@ -315,7 +314,7 @@ uint64_t bare_bounce_loop(const Mesh& mesh, const RayScene& scene, const BounceO
     thread_local std::vector<Eigen::Vector3d> dirs;
     uint64_t local = 0;
     for (size_t i = range.begin(); i != range.end(); ++i) {
-      vertex_rays(mesh, scene, offsets, generators, R, o.seed, static_cast<uint32_t>(i), rays, dirs);
+      vertex_rays(mesh, scene, offsets, lattice, R, o.seed, static_cast<uint32_t>(i), rays, dirs);
       intersect(scene, rays);
       for (const RTCRayHit& r : rays) local += r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
     }

@@ -60,6 +60,13 @@ Eigen::Vector2d doubling_lattice_point(uint32_t n, uint32_t base, const std::vec
   return {double(q) / double(M), double((q * g) % M) / double(M)};  // no half-cell offset: it would not nest
 }
 
+LatticeTable lattice_table(uint32_t first, uint32_t count, uint32_t base, const std::vector<uint32_t>& a) {
+  LatticeTable t;
+  t.u.reserve(count), t.cos_v.reserve(count), t.sin_v.reserve(count);
+  for (uint32_t k = 0; k < count; ++k) t.push_back(doubling_lattice_point(first + k, base, a));
+  return t;
+}
+
 Eigen::Vector3d cosine_direction(double u, double v) {
   const double r = std::sqrt(u), phi = 2.0 * M_PI * v;
   return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1.0 - u)));

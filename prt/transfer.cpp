@@ -60,12 +60,7 @@ struct RaySequence {
   uint32_t first = 0;
   uint32_t base[2] = {0, 0};
   std::vector<uint32_t> generators[2];
-  // Ray k's unshifted lattice point (u_k, v_k), as u_k and the azimuth's cos 2πv_k and sin 2πv_k:
-  // the same for every point of a call, so each point's rays cost no lattice arithmetic and no
-  // trigonometry. A point's shift (s, t) turns the azimuth by 2πt, cos 2π(v + t) = cos 2πv cos 2πt
-  // − sin 2πv sin 2πt (the wrap of v + t into [0,1) changes nothing there), and moves u to
-  // {u + s}.
-  std::vector<double> u, cos_v, sin_v;
+  LatticeTable lattice;  // ray k's lattice point, unshifted: the same at every point of a call
 };
 
 RaySequence ray_sequence(const TransferOptions& o) {
@@ -92,14 +87,11 @@ RaySequence ray_sequence(const TransferOptions& o) {
     q.base[0] = q.base[1] = uint32_t(R0 / 2);
   }
   for (int h = 0; h < 2; ++h) q.generators[h] = doubling_generators(q.base[h], doublings);
-  if (o.estimator != TransferEstimator::MonteCarlo) {
-    q.u.resize(R), q.cos_v.resize(R), q.sin_v.resize(R);
+  if (o.estimator != TransferEstimator::MonteCarlo)
     for (uint64_t k = 0; k < R; ++k) {
       const uint64_t g = q.first + k, h = g & 1;
-      const Eigen::Vector2d uv = doubling_lattice_point(uint32_t(g >> 1), q.base[h], q.generators[h]);
-      q.u[k] = uv.x(), q.cos_v[k] = std::cos(2 * M_PI * uv.y()), q.sin_v[k] = std::sin(2 * M_PI * uv.y());
+      q.lattice.push_back(doubling_lattice_point(uint32_t(g >> 1), q.base[h], q.generators[h]));
     }
-  }
   return q;
 }
 
@@ -126,8 +118,7 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
   const uint64_t stream = point_stream(opt, i);
   Rng rng(opt.seed, stream);
   const double shift[2][2] = {{rng.uniform(), rng.uniform()}, {rng.uniform(), rng.uniform()}};
-  const double turn_cos[2] = {std::cos(2 * M_PI * shift[0][1]), std::cos(2 * M_PI * shift[1][1])};
-  const double turn_sin[2] = {std::sin(2 * M_PI * shift[0][1]), std::sin(2 * M_PI * shift[1][1])};
+  const LatticeShift turn[2] = {LatticeShift(shift[0][0], shift[0][1]), LatticeShift(shift[1][0], shift[1][1])};
   // Plain Monte Carlo draws independent directions instead, from a stream of their own; a later
   // round skips the draws of the rays before it.
   Rng independent(opt.seed ^ 0x5D1A7E6C0FFEE123ull, stream);
@@ -140,14 +131,7 @@ void trace_point(const RayScene& scene, const RowMatrixX3d& points, const RowMat
       const double u = independent.uniform();
       d = cosine_direction(u, independent.uniform());
     } else {
-      // cosine_direction and uniform_hemisphere_direction of the shifted point, from the table.
-      const uint32_t h = (seq.first + k) & 1;
-      double u = seq.u[k] + shift[h][0];
-      u -= std::floor(u);
-      const double c = seq.cos_v[k] * turn_cos[h] - seq.sin_v[k] * turn_sin[h];
-      const double sn = seq.sin_v[k] * turn_cos[h] + seq.cos_v[k] * turn_sin[h];
-      const double z = uniform ? 1 - u : std::sqrt(std::max(0.0, 1 - u)), r = uniform ? std::sqrt(std::max(0.0, 1 - z * z)) : std::sqrt(u);
-      d = Eigen::Vector3d(r * c, r * sn, z);
+      d = shifted_direction(seq.lattice, k, turn[(seq.first + k) & 1], uniform);
     }
     Eigen::Vector3d w = (d.x() * t + d.y() * b + d.z() * n).normalized();
     buf.directions[k] = w;

@@ -94,6 +94,30 @@ TEST(Sampling, ShiftedLatticeDirectionsAreCosineDistributed) {
   EXPECT_NEAR(my / n, 0, 1e-3);
 }
 
+TEST(Sampling, ATabulatedLatticeGivesTheShiftedPointsDirectionsUpToRounding) {
+  // The table (cos and sin of each point's azimuth, turned by the shift's angle) against the
+  // shifted point's direction computed directly, for both warps, a doubled lattice read from an
+  // offset (a later round), and shifts that wrap u and v past 1.
+  const uint32_t base = 48;
+  const std::vector<uint32_t> a = doubling_generators(base, 2);
+  const LatticeTable table = lattice_table(base, 3 * base, base, a);
+  ASSERT_EQ(table.size(), size_t(3 * base));
+  Rng rng(3, 1);
+  for (int copy = 0; copy < 20; ++copy) {
+    const double s = rng.uniform(), t = rng.uniform();
+    const LatticeShift shift(s, t);
+    for (uint32_t k = 0; k < table.size(); ++k) {
+      const Eigen::Vector2d q = doubling_lattice_point(base + k, base, a);
+      EXPECT_EQ(table.u[k], q.x());
+      const double u = q.x() + s, v = q.y() + t;
+      const Eigen::Vector3d want = cosine_direction(u - std::floor(u), v - std::floor(v));
+      const Eigen::Vector3d want_uniform = uniform_hemisphere_direction(u - std::floor(u), v - std::floor(v));
+      EXPECT_LT((shifted_direction(table, k, shift) - want).cwiseAbs().maxCoeff(), 1e-13) << k;
+      EXPECT_LT((shifted_direction(table, k, shift, true) - want_uniform).cwiseAbs().maxCoeff(), 1e-13) << k;
+    }
+  }
+}
+
 TEST(Sampling, RngStreamsDependOnlyOnSeedAndStream) {
   Rng a(5, 9), b(5, 9), c(5, 10), d(6, 9);
   double va = a.uniform();
