@@ -5,13 +5,17 @@
 // a few dozen iterations where a Cholesky factorisation has to fill in a 3-D mesh's separators.
 // Each iteration makes three passes over row blocks: Y = AP with pᵀAp; X, R updated with rᵀr;
 // P = R + βP. With a preconditioner M (a multigrid cycle, multigrid.cpp), Z = M⁻¹R and rᵀz
-// come between the last two and P = Z + βP; the residual norm still decides convergence. The matrix is row-major and the vectors are row-major #n by K, so a row of A
+// come between the last two and P = Z + βP; the residual norm still decides convergence. A
+// preconditioner that inverts A's block on a few rows S and is the identity elsewhere
+// (RowBlockInverse: the fit's stiff rows) needs no Z: rᵀz is rᵀr corrected on S, and the pass
+// P = R + βP reads M⁻¹R's rows S from an |S| by K array. The matrix is row-major and the vectors are row-major #n by K, so a row of A
 // reads K contiguous values per neighbour. Dot products are summed per fixed block of rows and
 // then over blocks in order: the result is the same for any number of threads.
 #include "prtsub/prt/block_cg.h"
 
 #include "prtsub/prt/huge_pages.h"
 #include "prtsub/prt/parallel.h"
+#include "prtsub/subdiv/exceptions.h"
 
 #include <algorithm>
 #include <cmath>
@@ -69,8 +73,9 @@ void multiply_rows(const RowSparseMatrixd& A, const double* in, double* out, Eig
 // One block CG run: the state of K columns and the three passes of an iteration.
 class Run {
  public:
-  Run(const RowSparseMatrixd& A, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o, const BlockPreconditioner& m)
-      : A_(A), R_(B), X_(X), o_(o), m_(m), n_(A.rows()), K_(B.cols()), blocks_{n_, K_, (n_ + kBlockRows - 1) / kBlockRows, o.threads, {}},
+  Run(const RowSparseMatrixd& A, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o, const BlockPreconditioner& m,
+      const RowBlockInverse* block = nullptr)
+      : A_(A), R_(B), X_(X), o_(o), m_(m), block_(block && !block->rows.empty() ? block : nullptr), n_(A.rows()), K_(B.cols()), blocks_{n_, K_, (n_ + kBlockRows - 1) / kBlockRows, o.threads, {}},
         P_(n_, K_), Y_(n_, K_) {
     blocks_.partial.resize(size_t(blocks_.count * K_));
     prefer_huge_pages(P_), prefer_huge_pages(Y_);
@@ -95,6 +100,9 @@ class Run {
     if (m_) {
       rz_ = precondition();
       P_ = Z_;
+    } else if (block_) {
+      rz_ = precondition_block(rr_);
+      for (size_t a = 0; a < block_->rows.size(); ++a) P_.row(block_->rows[a]) = ZS_.row(Eigen::Index(a));
     }
     const auto k = static_cast<size_t>(K);
     target_.resize(k), alpha_.resize(k), beta_.resize(k), active_.resize(k);
@@ -138,7 +146,7 @@ class Run {
         }
       }
     });
-    const std::vector<double> next_rz = m_ ? precondition() : next;
+    const std::vector<double> next_rz = m_ ? precondition() : block_ ? precondition_block(next) : next;
     any = false;
     for (size_t c = 0; c < size_t(K); ++c) {
       beta_[c] = active_[c] && rz_[c] > 0 ? next_rz[c] / rz_[c] : 0;
@@ -159,13 +167,36 @@ class Run {
     });
   }
 
-  // P = Z + βP on the active columns (Z = R without a preconditioner).
+  // Z = M⁻¹R on the block's rows, into ZS_ (column-major |S| by K); returns rᵀz per column from
+  // rr, rᵀr over every row: off S, z = r. Summed over S in order: the same for any thread count.
+  std::vector<double> precondition_block(const std::vector<double>& rr) {
+    const std::vector<Eigen::Index>& S = block_->rows;
+    const Eigen::Index K = K_, m = Eigen::Index(S.size());
+    ZS_.resize(m, K);
+    for (Eigen::Index a = 0; a < m; ++a) ZS_.row(a) = R_.row(S[size_t(a)]);
+    std::vector<double> rz = rr;
+    for (Eigen::Index q = 0; q < K; ++q) rz[size_t(q)] -= ZS_.col(q).squaredNorm();
+    block_->solve(ZS_);
+    for (Eigen::Index a = 0; a < m; ++a)
+      for (Eigen::Index q = 0; q < K; ++q) rz[size_t(q)] += R_(S[size_t(a)], q) * ZS_(a, q);
+    return rz;
+  }
+
+  // P = Z + βP on the active columns (Z = R without a preconditioner, and off the block's rows).
   void next_direction() {
     const Eigen::Index K = K_;
     const RowMatrixXd& Z = m_ ? Z_ : R_;
+    const std::vector<Eigen::Index>* S = block_ ? &block_->rows : nullptr;
     blocks_.run([&](Eigen::Index f, Eigen::Index l, double*) {
+      size_t a = S ? size_t(std::lower_bound(S->begin(), S->end(), f) - S->begin()) : 0;
       for (Eigen::Index i = f; i < l; ++i) {
         double* p = P_.data() + i * K;
+        if (S && a < S->size() && (*S)[a] == i) {
+          for (Eigen::Index q = 0; q < K; ++q)
+            if (active_[size_t(q)]) p[q] = ZS_(Eigen::Index(a), q) + beta_[size_t(q)] * p[q];
+          ++a;
+          continue;
+        }
         const double* z = Z.data() + i * K;
         for (Eigen::Index q = 0; q < K; ++q)
           if (active_[size_t(q)]) p[q] = z[q] + beta_[size_t(q)] * p[q];
@@ -197,17 +228,21 @@ class Run {
   RowMatrixXd& X_;
   const BlockCgOptions& o_;
   const BlockPreconditioner& m_;
+  const RowBlockInverse* block_;
   Eigen::Index n_, K_;
   Blocks blocks_;
   RowMatrixXd P_, Y_, Z_;
+  Eigen::MatrixXd ZS_;  // M⁻¹R on the block's rows
   std::vector<double> bb_, rr_, rz_, target_, alpha_, beta_, history_;
   std::vector<char> active_;
 };
 
 }  // namespace
 
-BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o,
-                                       const BlockPreconditioner& m) {
+namespace {
+
+BlockCgResult solve(const RowSparseMatrixd& A_in, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o, const BlockPreconditioner& m,
+                    const RowBlockInverse* block) {
   BlockCgResult result;
   if (A_in.rows() == 0 || B.cols() == 0) {
     result.converged = true;
@@ -218,7 +253,7 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd
   RowSparseMatrixd compressed;
   if (!A_in.isCompressed()) compressed = A_in, compressed.makeCompressed();
   const RowSparseMatrixd& A = A_in.isCompressed() ? A_in : compressed;
-  Run run(A, B, X, o, m);
+  Run run(A, B, X, o, m, block);
   bool any = run.start(), broke = false;
   while (any && result.iterations < o.max_iterations) {
     if (!run.step(any)) {
@@ -236,6 +271,22 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A_in, RowMatrixXd
   result.converged = !any && !broke;
   result.relative_residual = run.worst();
   return result;
+}
+
+}  // namespace
+
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o,
+                                       const BlockPreconditioner& m) {
+  return solve(A, B, X, o, m, nullptr);
+}
+
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o,
+                                       const RowBlockInverse& block) {
+  for (size_t a = 0; a < block.rows.size(); ++a)
+    if (block.rows[a] < 0 || block.rows[a] >= A.rows() || (a > 0 && block.rows[a] <= block.rows[a - 1]))
+      throw InputError("block CG: the preconditioner's rows must be ascending indices of the matrix");
+  if (!block.rows.empty() && !block.solve) throw InputError("block CG: the preconditioner's block has no solve");
+  return solve(A, B, X, o, {}, &block);
 }
 
 }  // namespace prtsub

@@ -4,6 +4,7 @@
 
 #include <Eigen/SparseCore>
 #include <functional>
+#include <vector>
 
 #include "prtsub/subdiv/mesh.h"
 
@@ -28,6 +29,15 @@ void multiply_sparse_rows(const RowSparseMatrixd& A, const double* in, double* o
 //! Z ≈ A⁻¹R for n by K residuals R: a symmetric positive definite operator (a multigrid cycle).
 using BlockPreconditioner = std::function<void(const RowMatrixXd& R, RowMatrixXd& Z)>;
 
+//! The identity except on a few rows S, where it is the inverse of A's block on them:
+//! M = A_SS there, I elsewhere (for A scaled to a unit diagonal). It is what a system needs whose
+//! stiff rows are few (fit.cpp); CG then keeps only an |S| by K array for M⁻¹R, not an n by K one.
+struct RowBlockInverse {
+  std::vector<Eigen::Index> rows;  //!< S, ascending, no repeats
+  //! In place: the residual's rows S (|S| by K) become A_SS⁻¹ times them.
+  std::function<void(Eigen::MatrixXd& block)> solve;
+};
+
 struct BlockCgResult {
   int iterations = 0;             //!< of the slowest column
   bool converged = false;         //!< every column reached the tolerance
@@ -44,5 +54,9 @@ struct BlockCgResult {
 //! \param B n by K, by value: its storage becomes the residual's (move it in if you are done with it)
 BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X,
                                        const BlockCgOptions& options = {}, const BlockPreconditioner& preconditioner = {});
+//! The same with M = RowBlockInverse: identity off its rows, their block's inverse on them.
+//! \throw InputError if its rows are not ascending indices of A
+BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& options,
+                                       const RowBlockInverse& block);
 
 }  // namespace prtsub
