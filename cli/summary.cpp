@@ -137,12 +137,17 @@ void record(Report& r, const FitStats& f, const FitOptions& o, const FitData& da
   r.set("fit_multigrid_levels", f.multigrid_levels);
   r.set("fit_multigrid_operator_complexity", f.multigrid_operator_complexity);
   // What CG's iterations were: the solution, or the attempt before CHOLMOD took over.
-  if (f.cg_iterations > 0) r.set("fit_cg_note", f.solver == "cg" ? "CG iterations" : "CG iterations first");
+  if (f.cg_iterations > 0)
+    r.set("fit_cg_note", f.solver != "cg"    ? "CG iterations first"
+                         : f.stiff_rows > 0 ? "CG iterations, " + std::to_string(f.stiff_rows) + " stiff rows solved directly in each"
+                                            : std::string("CG iterations"));
   r.set("fit_unsupported_vertices", f.unsupported);
   r.set("fit_stabilizer", f.stabilizer);
   r.set("fit_system_nonzeros", f.system_nonzeros);
   r.set("fit_factor_nonzeros", f.factor_nonzeros);
   r.set("fit_stiff_share", f.stiff_share);
+  r.set("fit_stiff_rows", f.stiff_rows);
+  r.set("fit_stiff_factor_nonzeros", f.stiff_factor_entries);
   r.set("fit_predicted_factor_nonzeros", f.predicted_factor_entries);
   r.set("solve_memory_mib", f.solve_memory_mib);
   r.set("seconds_fit_assemble", f.seconds_assemble);

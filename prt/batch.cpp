@@ -57,7 +57,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
   s << "uniform " << o.uniform.levels << " " << uniform_scheme_name(o.uniform.scheme) << "\n";
   const FitOptions& f = o.fit;
   s << "fit " << fit_method_name(f.method) << " " << regularizer_name(f.regularizer) << " " << f.alpha << " " << mass_matrix_name(f.mass)
-    << " " << f.control_variate << " " << fit_solver_name(f.solver) << " " << f.cg_tolerance << " " << f.cg_max_iterations << " "
+    << " " << f.control_variate << " " << fit_solver_name(f.solver) << " " << f.cg_tolerance << " " << f.cg_max_iterations << " " << f.stiff_mass << " "
     << f.weigh_by_noise << " " << non_negative_name(f.non_negative) << "\n";
   s << "samples " << o.samples.per_triangle << " " << o.samples.density << " " << o.samples.min_per_triangle << " " << o.samples.seed << "\n";
   s << "allocation " << sample_allocation_name(o.allocation) << " vertex_share " << o.vertex_share << " target " << o.target_error

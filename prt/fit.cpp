@@ -31,10 +31,13 @@
 //
 // Solving: with the analytic mass, block conjugate gradients (block_cg.cpp) started at the prior:
 // the scaled mass matrix is well conditioned on any mesh, and CG needs 10–25 passes over the
-// matrix to a relative residual of 1e-6, where a Cholesky factor of a 3-D mesh fills in. Where
-// the regulariser dominates many rows (slivers beside large faces: buildings), the system is stiff;
-// that is decided before any iteration, and if CHOLMOD's symbolic analysis then finds a small
-// factor it solves instead. If CG stalls after all, or with the sampled mass (which can be
+// matrix to a relative residual of 1e-6, where a Cholesky factor of a 3-D mesh fills in. Rows
+// whose diagonal the regulariser holds almost alone (slivers beside large faces in buildings,
+// degenerate faces in scans) are stiff: CG solves their block directly in each iteration
+// (stiff_block.cpp), which is cheap because they are few and follow the slivers, and then
+// converges as on a plain mesh. Only if that block would fill in (a stiff 3-D region: a huge α)
+// does CHOLMOD's symbolic analysis of the whole system decide between it and Jacobi CG; all of
+// it before any iteration. If CG stalls after all, or with the sampled mass (which can be
 // singular), one CHOLMOD supernodal Cholesky factorisation (AMD ordering) for all K right-hand sides. If it fails or its pivot ratio falls below 1e-7 (α = 0 with the sampled
 // mass matrix, faces of area ~1e-16), we add λ·D(x − prior) with D the lumped mass, trying
 // λ = 1e-9, 1e-6, 1e-3, 1; the warning says which was needed. On request (--solver multigrid),
@@ -77,6 +80,7 @@
 #include "prtsub/prt/multigrid.h"
 #include "prtsub/prt/parallel.h"
 #include "prtsub/prt/sh.h"
+#include "prtsub/prt/stiff_block.h"
 #include "prtsub/prt/unshadowed_projection.h"
 #include "prtsub/subdiv/adjacency.h"
 #include "prtsub/subdiv/exceptions.h"
@@ -605,6 +609,7 @@ void check_fit_inputs(const Mesh& mesh, const SurfaceSamples& s, const FaceMomen
   if (prior.rows() != V || prior.cols() != moments.rows.cols())
     throw InputError("fit: the prior needs one row per vertex and a column per value");
   if (!(o.alpha >= 0) || !std::isfinite(o.alpha)) throw InputError("fit: alpha must be finite and non-negative, got " + std::to_string(o.alpha));
+  if (!(o.stiff_mass >= 0 && o.stiff_mass <= 1)) throw InputError("fit: the stiff rows' mass share must be in [0, 1], got " + std::to_string(o.stiff_mass));
   check_samples(mesh, s);
   if (static_cast<size_t>(moments.rows.rows()) != 3 * mesh.num_faces()) throw InputError("fit: three rows of moments per face expected");
   if (!sampled_moments_finite(s, moments, o.threads) || !all_finite(prior, o.threads)) throw InputError("fit: non-finite sample values");
@@ -782,19 +787,24 @@ class FitSystemSolver::Cholesky : public Eigen::CholmodSupernodalLLT<SparseMatri
 
 namespace {
 
-// A row is stiff when the mass holds under 5% of its diagonal (the analytic mass's diagonal is half
-// the lumped mass). Measured with `prtsub bench SCENE --solve` on the shared scenes: the three
-// where CG stalled have 2.1% (sibenik), 11.8% (conference) and 18.6% (house_on_site) of their
-// rows stiff; of those where it converged, mori_knob has 3.1% (38 iterations), the rest under 0.1%.
+// The block is cheap when its factor holds at most as many entries as the system (both
+// triangles): the preconditioner then costs no more memory than the matrix. Its rows follow
+// slivers and degenerate faces, which do not fill in: 0.10–0.22 of the system's entries on the
+// shared buildings, refined sibenik's included (`prtsub bench SCENE --solve`).
+constexpr double kCheapBlock = 1;
+// When the block is dear: a share of stiff rows from which the whole system goes to CHOLMOD if
+// its factor holds at most kCheapFill times the system's non-zeros (3× on conference; a 3-D
+// scan's is 10×, armadillo's).
 constexpr double kStiffShare = 0.01;
-// CHOLMOD for a stiff system when its factor holds at most this many times the system's
-// non-zeros (both triangles): 3× on conference; a 3-D scan's is 10× (armadillo).
 constexpr double kCheapFill = 6;
 
-double stiff_share(const FitSystem& sys) {
-  size_t stiff = 0;
-  for (Eigen::Index i = 0; i < sys.scale.size(); ++i) stiff += 0.5 * sys.lumped[i] * sys.scale[i] * sys.scale[i] < 0.05;
-  return sys.scale.size() ? double(stiff) / double(sys.scale.size()) : 0.0;
+// The rows whose mass is under `share` of their scaled diagonal (the analytic mass's diagonal is
+// half the lumped mass).
+std::vector<Eigen::Index> stiff_rows(const FitSystem& sys, double share) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < sys.scale.size(); ++i)
+    if (0.5 * sys.lumped[i] * sys.scale[i] * sys.scale[i] < share) rows.push_back(i);
+  return rows;
 }
 
 }  // namespace
@@ -858,8 +868,18 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
   // CHOLMOD if its factor is small, CG (with the stall check as a last resort) if not.
   bool iterate = n > 0 && !factored_ && options_.solver != FitSolver::Cholmod && options_.mass == MassMatrix::Analytic;
   bool multigrid = options_.solver == FitSolver::Multigrid;
-  if (n > 0) stats.stiff_share = stiff_share(sys);
-  if (iterate && options_.solver == FitSolver::Auto) {
+  std::vector<Eigen::Index> stiff = n > 0 ? stiff_rows(sys, options_.stiff_mass) : std::vector<Eigen::Index>();
+  if (n > 0) stats.stiff_share = double(stiff.size()) / double(n);
+  if (iterate && !multigrid && !stiff.empty() && !stiff_tried_) {
+    stiff_tried_ = true;
+    stats.seconds_solve += clock.lap();  // the set-up above (x's copy of the prior) is the solve's
+    stiff_ = std::make_unique<StiffBlock>(sys.matrix, std::move(stiff));
+    const bool cheap = double(stiff_->predicted_factor_entries()) <= kCheapBlock * double(sys.matrix.nonZeros());
+    if (!cheap || !stiff_->factorise()) stiff_.reset();
+    stats.seconds_factor += clock.lap();
+  }
+  if (stiff_) stats.stiff_rows = stiff_->rows().size(), stats.stiff_factor_entries = stiff_->predicted_factor_entries();
+  if (iterate && options_.solver == FitSolver::Auto && !stiff_) {
     if (stats.stiff_share >= kStiffShare) {
       if (!cholesky_) analyze(stats);
       stats.predicted_factor_entries = size_t(predicted_factor_entries_);
@@ -892,14 +912,19 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
       const Multigrid& mg = *multigrid_;
       preconditioner = [&mg](const RowMatrixXd& r, RowMatrixXd& z) { mg.apply(r, z); };
     }
-    const BlockCgResult cg = block_conjugate_gradient(sys.matrix, sys.rhs, y, {options_.cg_tolerance, options_.cg_max_iterations, options_.threads}, preconditioner);
+    const BlockCgOptions co{options_.cg_tolerance, options_.cg_max_iterations, options_.threads};
+    const BlockCgResult cg = stiff_ && !multigrid ? block_conjugate_gradient(sys.matrix, sys.rhs, y, co, stiff_->inverse())
+                                                  : block_conjugate_gradient(sys.matrix, sys.rhs, y, co, preconditioner);
     stats.cg_iterations = cg.iterations;
     if (cg.converged && y.allFinite()) {
       for (size_t i = 0; i < slot.size(); ++i)
         if (slot[i] >= 0) x.row(static_cast<Eigen::Index>(i)) = sys.scale[slot[i]] * y.row(slot[i]);
       stats.solver = multigrid ? "cg-multigrid" : "cg";
       stats.seconds_solve += clock.lap();
-      const double hierarchy = multigrid ? multigrid_->stats().bytes + 3 * vectors_bytes : 0.0;  // + Z and a cycle's two work arrays
+      double hierarchy = multigrid ? multigrid_->stats().bytes + 3 * vectors_bytes : 0.0;  // + Z and a cycle's two work arrays
+      if (stiff_ && !multigrid)  // the block, its factor and M⁻¹R on its rows
+        hierarchy += 12.0 * double(stiff_->block_nonzeros() + stiff_->predicted_factor_entries()) +
+                     8.0 * double(stiff_->rows().size()) * double(K);
       stats.solve_memory_mib = (12.0 * static_cast<double>(sys.matrix.nonZeros()) + 6 * vectors_bytes + hierarchy) / (1024.0 * 1024.0);
       if (stats_out) *stats_out = stats;
       return x;

@@ -40,6 +40,7 @@ const char* fit_solver_name(FitSolver s);
 const char* non_negative_name(NonNegative n);
 
 class Multigrid;
+class StiffBlock;
 
 struct FitOptions {
   FitMethod method = FitMethod::LeastSquares;
@@ -57,6 +58,10 @@ struct FitOptions {
   //! four digits: bench/fit_tolerance.sh), in about 60% of the iterations 1e-10 takes.
   double cg_tolerance = 1e-6;
   int cg_max_iterations = 100;  //!< beyond this (or when CG predicts it), CHOLMOD takes over
+  //! A row is stiff when the mass holds under this share of its (scaled) diagonal; CG solves the
+  //! stiff rows' block directly in each iteration. 0: none (Jacobi alone). Measured with
+  //! bench/stiff_block.sh (BENCHMARKS.md "Stiff rows solved directly").
+  double stiff_mass = 0.2;
   int threads = 0;     //!< for the iterative solve; 0: every core (the result does not depend on it)
   //! Keep of each vertex's correction (fit − prior) the share its noise allows: where the
   //! correction is mostly the samples' noise, the point sample stays; where it is systematic
@@ -75,10 +80,14 @@ struct FitStats {
   size_t unsupported = 0;          //!< vertices no sampled face touches: they keep the prior
   size_t system_nonzeros = 0;      //!< of A + αR (both triangles)
   size_t factor_nonzeros = 0;      //!< of the Cholesky factor L (0 when CG solved it)
-  //! share of the unknowns whose diagonal is over 95% regulariser: from 1%, the system is stiff
-  //! and CHOLMOD's symbolic analysis decides between it and CG
+  //! share of the unknowns whose diagonal is over 80% regulariser (stiff rows): CG solves their
+  //! block directly in each iteration (its preconditioner), unless that block's factor is dear
   double stiff_share = 0;
-  size_t predicted_factor_entries = 0;  //!< that analysis's count, when it ran (0 otherwise)
+  size_t stiff_rows = 0;                //!< rows in CG's directly solved block (0: Jacobi alone)
+  size_t stiff_factor_entries = 0;      //!< that block's Cholesky factor
+  //! the whole system's symbolic analysis, when it ran (the stiff block was too dear): CHOLMOD
+  //! instead of CG where this count is small
+  size_t predicted_factor_entries = 0;
   std::string solver;              //!< "cg", "cg-multigrid" or "cholmod": what produced the values
   int multigrid_levels = 0;        //!< of the multigrid preconditioner (0: none)
   double multigrid_operator_complexity = 0;  //!< its non-zeros over all levels / the system's
@@ -160,12 +169,13 @@ FitSystem assemble_fit_system(const Mesh& mesh, const SurfaceSamples& samples, c
                               const RowMatrixXd& prior, const FitOptions& options, FitStats* stats = nullptr);
 
 //! Solves a FitSystem for all K right-hand sides at once. With the analytic mass matrix and
-//! FitSolver::Auto: block conjugate gradients started at the prior (the scaled mass is well
-//! conditioned on any mesh), unless the regulariser makes the system stiff (FitStats::stiff_share)
-//! and CHOLMOD's symbolic analysis finds a small factor; chosen before any iteration. Otherwise,
-//! or if CG stalls after all: one CHOLMOD supernodal Cholesky factorisation, kept for every later solve.
-//! FitSolver::Cg and FitSolver::Multigrid skip the choice (the latter builds its hierarchy once and
-//! keeps it for later solves). A singular system (α = 0 with a mass matrix that
+//! FitSolver::Auto or Cg: block conjugate gradients started at the prior (the scaled mass is well
+//! conditioned on any mesh), preconditioned by a direct solve of the stiff rows' block where the
+//! regulariser makes some rows stiff (FitStats::stiff_rows; StiffBlock). Only if that block's
+//! factor would be dear does Auto let CHOLMOD's symbolic analysis of the whole system choose
+//! between it and Jacobi CG; chosen before any iteration. With the sampled mass, FitSolver::Cholmod,
+//! or if CG stalls after all: one CHOLMOD supernodal Cholesky factorisation, kept for every later
+//! solve. FitSolver::Multigrid preconditions CG by a multigrid cycle instead (built once, kept). A singular system (α = 0 with a mass matrix that
 //! cannot see a vertex) is stabilised by a pull towards the prior, λ·D(x − prior), with the
 //! smallest λ that factorises; FitStats says so. Keeps a reference to `system`.
 class FitSystemSolver {
@@ -184,6 +194,8 @@ class FitSystemSolver {
   void analyze(FitStats& stats);
   void factorize(FitStats& stats);
   std::unique_ptr<Multigrid> multigrid_;  // FitSolver::Multigrid's hierarchy, built at the first solve
+  std::unique_ptr<StiffBlock> stiff_;     // CG's preconditioner, built at the first solve
+  bool stiff_tried_ = false;
   const FitSystem& system_;
   FitOptions options_;
   std::unique_ptr<Cholesky> cholesky_;
