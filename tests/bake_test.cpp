@@ -227,6 +227,18 @@ TEST(Bake, AnErrorTargetAddsVertexRaysUntilTheHeldOutErrorMeetsIt) {
   EXPECT_EQ(met.rays, plain.rays + met.target_rays);
   EXPECT_GT(*std::max_element(met.vertex_rays.begin(), met.vertex_rays.end()), 4.0);
   EXPECT_TRUE(met.warnings.empty()) << met.warnings.front();
+  // A target that needs many times the rays the vertices hold: no round may more than double
+  // them (a plan sized on the room E² − bias² alone can overshoot it many times); the rounds
+  // measure again as they go, and together they meet it.
+  double held = 0;
+  for (double v : plain.vertex_rays) held += v;
+  o.target_error = 0.4 * plain.predicted.percent;
+  const BakeResult far = bake(mesh, o);
+  std::printf("--error %.3f: %d rounds, %llu rays on %.0f held\n", o.target_error, far.target_rounds,
+              (unsigned long long)far.target_rays, held);
+  EXPECT_LE(far.predicted.percent, o.target_error);
+  EXPECT_GE(far.target_rounds, 2);
+  EXPECT_LE(double(far.target_rays), (std::ldexp(1.0, far.target_rounds) - 1) * held);
   o.target_error = 0.001;  // far below what 512 ground triangles can interpolate
   const BakeResult unreachable = bake(mesh, o);
   ASSERT_FALSE(unreachable.warnings.empty());
