@@ -862,10 +862,11 @@ RowMatrixXd FitSystemSolver::solve(const RowMatrixXd& prior, FitStats* stats_out
   // mass matrix, Jacobi-scaled, has eigenvalues in [1/2, 2] whatever the mesh. Started at the
   // prior, they need a few dozen passes over the matrix; a Cholesky factor of a 3-D mesh fills in.
   // The solver is chosen before any iteration is spent. Where the regulariser carries nearly all
-  // of many rows' diagonals (slivers beside large faces), the scaled system is stiff and CG
-  // crawls; such meshes (buildings) are mostly planar, and their Cholesky factor fills in little.
-  // So: few stiff rows, CG; many, CHOLMOD's symbolic analysis (reused by the factorisation) and
-  // CHOLMOD if its factor is small, CG (with the stall check as a last resort) if not.
+  // of a row's diagonal (slivers beside large faces, degenerate faces), Jacobi-scaled CG crawls;
+  // so CG solves those rows' block directly in each iteration (StiffBlock), its factor made once.
+  // Only if that factor would outgrow the system (a stiff 3-D region) does the whole system's
+  // symbolic analysis (reused by the factorisation) choose: CHOLMOD if its factor is small, Jacobi
+  // CG (with the stall check as a last resort) if not.
   bool iterate = n > 0 && !factored_ && options_.solver != FitSolver::Cholmod && options_.mass == MassMatrix::Analytic;
   bool multigrid = options_.solver == FitSolver::Multigrid;
   std::vector<Eigen::Index> stiff = n > 0 ? stiff_rows(sys, options_.stiff_mass) : std::vector<Eigen::Index>();
