@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace prtsub {
@@ -239,6 +240,12 @@ class Run {
 
 }  // namespace
 
+void check_block_rows(const std::vector<Eigen::Index>& rows, Eigen::Index n, const char* what) {
+  for (size_t a = 0; a < rows.size(); ++a)
+    if (rows[a] < 0 || rows[a] >= n || (a > 0 && rows[a] <= rows[a - 1]))
+      throw InputError(std::string(what) + " rows must be ascending indices of the matrix");
+}
+
 namespace {
 
 BlockCgResult solve(const RowSparseMatrixd& A_in, RowMatrixXd& B, RowMatrixXd& X, const BlockCgOptions& o, const BlockPreconditioner& m,
@@ -282,9 +289,7 @@ BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B,
 
 BlockCgResult block_conjugate_gradient(const RowSparseMatrixd& A, RowMatrixXd B, RowMatrixXd& X, const BlockCgOptions& o,
                                        const RowBlockInverse& block) {
-  for (size_t a = 0; a < block.rows.size(); ++a)
-    if (block.rows[a] < 0 || block.rows[a] >= A.rows() || (a > 0 && block.rows[a] <= block.rows[a - 1]))
-      throw InputError("block CG: the preconditioner's rows must be ascending indices of the matrix");
+  check_block_rows(block.rows, A.rows(), "block CG: the preconditioner's");
   if (!block.rows.empty() && !block.solve) throw InputError("block CG: the preconditioner's block has no solve");
   return solve(A, B, X, o, {}, &block);
 }

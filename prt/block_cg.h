@@ -38,6 +38,9 @@ struct RowBlockInverse {
   std::function<void(Eigen::MatrixXd& block)> solve;
 };
 
+//! \throw InputError (naming `what`) unless `rows` are ascending, unrepeated indices below n
+void check_block_rows(const std::vector<Eigen::Index>& rows, Eigen::Index n, const char* what);
+
 struct BlockCgResult {
   int iterations = 0;             //!< of the slowest column
   bool converged = false;         //!< every column reached the tolerance

@@ -25,13 +25,9 @@ struct StiffBlock::Factor {
 
 StiffBlock::StiffBlock(const RowSparseMatrixd& A, std::vector<Eigen::Index> rows) : rows_(std::move(rows)), factor_(std::make_unique<Factor>()) {
   const Eigen::Index n = A.rows(), m = Eigen::Index(rows_.size());
+  check_block_rows(rows_, n, "stiff block:");
   std::vector<Eigen::Index> slot(size_t(n), -1);
-  for (Eigen::Index a = 0; a < m; ++a) {
-    const Eigen::Index i = rows_[size_t(a)];
-    if (i < 0 || i >= n || (a > 0 && i <= rows_[size_t(a - 1)]))
-      throw InputError("stiff block: its rows must be ascending indices of the matrix");
-    slot[size_t(i)] = a;
-  }
+  for (Eigen::Index a = 0; a < m; ++a) slot[size_t(rows_[size_t(a)])] = a;
   std::vector<Eigen::Triplet<double>> t;
   for (Eigen::Index a = 0; a < m; ++a)
     for (RowSparseMatrixd::InnerIterator it(A, rows_[size_t(a)]); it; ++it) {
