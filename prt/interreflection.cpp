@@ -169,7 +169,7 @@ RowMatrixXd interreflected_transfer(const Mesh& mesh, const RayScene& scene, con
     return total;
   }
   const auto R = static_cast<uint32_t>(o.rays);
-  const LatticeTable lattice = lattice_table(0, R, R, doubling_generators(R, 0));
+  const LatticeTable lattice = lattice_table(0, R, doubling_lattice(R, 0));
   const RowMatrixX3d offsets = vertex_offset_directions(mesh);
   const std::vector<Eigen::Vector3d> face_normal = face_normals(mesh);
   const double cache_mib = double(V) * R * sizeof(Hit) / (1024.0 * 1024.0);
@@ -228,7 +228,7 @@ RowMatrixXd gather_bounce(const Mesh& mesh, const RayScene& scene, const RowMatr
   check_colour(mesh, values, o, "gather");
   const Stopwatch clock;
   const auto R = static_cast<uint32_t>(o.rays);
-  const LatticeTable lattice = lattice_table(0, R, R, doubling_generators(R, 0));
+  const LatticeTable lattice = lattice_table(0, R, doubling_lattice(R, 0));
   const std::vector<Eigen::Vector3d> face_normal = face_normals(mesh);
   RowMatrixXd out(points.rows(), values.cols());
   parallel_range<Eigen::Index>(points.rows(), o.threads, 16, [&](const tbb::blocked_range<Eigen::Index>& range) {
@@ -305,7 +305,7 @@ double bounce_noise(const Mesh& mesh, const RayScene& scene, const RowMatrixXd& 
 uint64_t bare_bounce_loop(const Mesh& mesh, const RayScene& scene, const BounceOptions& o, TransferStats* stats) {
   check_bounce_options(o);
   const auto R = static_cast<uint32_t>(o.rays);
-  const LatticeTable lattice = lattice_table(0, R, R, doubling_generators(R, 0));
+  const LatticeTable lattice = lattice_table(0, R, doubling_lattice(R, 0));
   const RowMatrixX3d offsets = vertex_offset_directions(mesh);
   std::atomic<uint64_t> hits{0};
   const Stopwatch clock;

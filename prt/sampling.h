@@ -16,22 +16,38 @@ namespace prtsub {
 //! (Duff et al. 2017).
 void tangent_frame(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b);
 
-//! Zaremba's index of the 2D rank-1 lattice {(q/M, q·a/M)}: the least max(1,|h1|)·max(1,|h2|)
-//! over nonzero dual vectors (h1 + a·h2 ≡ 0 mod M). The larger, the smaller the worst-case
-//! error for integrands of bounded variation; Fibonacci lattices are the best in 2D.
-uint64_t zaremba_index(uint32_t M, uint32_t a);
+//! Zaremba's index of the 2D lattice {(i/n1, {(i·s/n1 + k)/n2})} (its Hermite normal form; n2 = 1
+//! is the rank-1 lattice {(q/n1, {q·s/n1})}): the least max(1,|h1|)·max(1,|h2|) over nonzero
+//! dual vectors. The larger, the smaller the worst-case error for integrands of bounded
+//! variation; Fibonacci lattices are the best rank-1 lattices in 2D.
+uint64_t zaremba_index(uint64_t n1, uint64_t n2, uint64_t s);
+//! The rank-1 lattice's {(q/M, {q·a/M})}.
+inline uint64_t zaremba_index(uint32_t M, uint32_t a) { return zaremba_index(M, 1, a); }
 
-//! A lattice of `base` points that can be doubled `doublings` times: generators a_0 .. a_d,
-//! lattice j having M_j = base·2^j points (q/M_j, {q·a_j/M_j}). a_0 is the best by Zaremba's
-//! index near base·(√5−1)/2 (a Fibonacci-like lattice), and each a_j is a_{j−1} or a_{j−1} + M_{j−1},
-//! the two that contain lattice j−1, whichever has the larger index.
-std::vector<uint32_t> doubling_generators(uint32_t base, int doublings);
+//! A lattice of `base` points that doubles: lattice j has base·2^j points and lattice j + 1 is
+//! lattice j and a copy of it moved by offsets[j]. Lattice 0 is rank-1, its generator the best by
+//! Zaremba's index near base·(√5−1)/2 (a Fibonacci-like lattice). Three lattices contain lattice
+//! j twice over: two rank-1 ones, and one whose elevation coordinate takes half as many values.
+//! Each doubling takes the better rank-1 one by Zaremba's index, or the third where its index is
+//! at least 1.5 times that. Up to 2026-12-07 only the rank-1 two were weighed, and after three
+//! doublings of 64 points the index was a third of a fresh lattice's (BENCHMARKS.md, "Later
+//! rounds on lattices that stay good").
+struct DoublingLattice {
+  struct Form {
+    uint64_t n1 = 1, n2 = 1, s = 0;  //!< the Hermite normal form of zaremba_index
+  };
+  uint32_t base = 0, generator = 0;
+  std::vector<Form> forms;               //!< lattice j
+  std::vector<Eigen::Vector2d> offsets;  //!< lattice j + 1 = lattice j ∪ (lattice j + offsets[j])
+};
+DoublingLattice doubling_lattice(uint32_t base, int doublings);
 
-//! Point n of the doubling sequence, unshifted, in [0,1)²: the base lattice's points for
-//! n < base, then each doubling's new points (odd q). Its first base·2^j points are lattice j,
-//! so a later round of rays that continues from n = base·2^j fills in the earlier strata.
-//! \param a doubling_generators(base, d) with base·2^d > n
-Eigen::Vector2d doubling_lattice_point(uint32_t n, uint32_t base, const std::vector<uint32_t>& a);
+//! Point n of the doubling sequence, unshifted, in [0,1)²: lattice 0's points (q/base,
+//! {q·a/base}) for n < base, then each doubling's new points, point n − M_j of the sequence moved
+//! by offsets[j] for M_j ≤ n < 2·M_j. Its first base·2^j points are lattice j, so a later round
+//! of rays that continues from n = base·2^j fills in the earlier strata.
+//! \param l doubling_lattice(base, d) with base·2^d > n
+Eigen::Vector2d doubling_lattice_point(uint32_t n, const DoublingLattice& l);
 
 //! The cosine-weighted direction for (u, v) ∈ [0,1)² in the local frame (z = normal), by
 //! Malley's method: uniform on the disk (area-preserving in u), lifted to the hemisphere. Every
@@ -76,6 +92,6 @@ inline Eigen::Vector3d shifted_direction(const LatticeTable& table, size_t k, co
 }
 
 //! Points first .. first + count − 1 of the doubling sequence (doubling_lattice_point), tabulated.
-LatticeTable lattice_table(uint32_t first, uint32_t count, uint32_t base, const std::vector<uint32_t>& a);
+LatticeTable lattice_table(uint32_t first, uint32_t count, const DoublingLattice& l);
 
 }  // namespace prtsub

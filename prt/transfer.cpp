@@ -18,10 +18,10 @@
 // Directions come from rank-1 lattices chosen by Zaremba's index (Fibonacci-like for any size),
 // shifted by hashes of (seed, point's stream, half): decorrelated between points and identical
 // for any thread count. A lattice can be doubled, the new lattice containing the old one
-// (sampling.h), so a later round of rays at a vertex (vertex_top_up) fills in its first round's
-// strata instead of adding an independent set: the merged estimate converges as one round of
-// the total would. One point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured
-// 20-45% faster than single rays.
+// (sampling.h; after a doubling it may no longer be rank-1), so a later round of rays at a vertex
+// (vertex_top_up) fills in its first round's strata instead of adding an independent set. One
+// point's rays go to Embree as one stream (rtcOccluded1M), which STACK.md measured 20-45% faster
+// than single rays.
 //
 // Other estimators, for comparison (docs/transfer.md, BENCHMARKS.md "Estimators"): plain Monte
 // Carlo projection over independent directions, and the progressive least-squares encoder of
@@ -59,7 +59,7 @@ constexpr Eigen::Index kGrain = 16;  // points per task: small enough to balance
 struct RaySequence {
   uint32_t first = 0;
   uint32_t base[2] = {0, 0};
-  std::vector<uint32_t> generators[2];
+  DoublingLattice lattices[2];
   LatticeTable lattice;  // ray k's lattice point, unshifted: the same at every point of a call
 };
 
@@ -86,11 +86,11 @@ RaySequence ray_sequence(const TransferOptions& o) {
                        std::to_string(o.first_ray) + " to " + std::to_string(end) + " after a first round of " + std::to_string(R0));
     q.base[0] = q.base[1] = uint32_t(R0 / 2);
   }
-  for (int h = 0; h < 2; ++h) q.generators[h] = doubling_generators(q.base[h], doublings);
+  for (int h = 0; h < 2; ++h) q.lattices[h] = doubling_lattice(q.base[h], doublings);
   if (o.estimator != TransferEstimator::MonteCarlo)
     for (uint64_t k = 0; k < R; ++k) {
       const uint64_t g = q.first + k, h = g & 1;
-      q.lattice.push_back(doubling_lattice_point(uint32_t(g >> 1), q.base[h], q.generators[h]));
+      q.lattice.push_back(doubling_lattice_point(uint32_t(g >> 1), q.lattices[h]));
     }
   return q;
 }
