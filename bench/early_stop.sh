@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Per-vertex early stop against fixed ray counts (issue 15 point 2): each scene baked with every
-# vertex at 1024 and at 512 rays (--rays-fixed), and with early stop from 32 up to 1024 rays
-# (--first-rays 32 --rays 1024) at several --ray-noise prices (NOISE, default "0.5 1 2"); every
-# asset judged by eval against one fixed reference (--rays 8192, --points 20000, its seed fixed),
-# so the columns compare the assets, not references.
+# vertex at 1024 and at 512 rays (--rays-fixed), and with early stop from FIRST (default 32) up
+# to 1024 rays (--first-rays FIRST --rays 1024) at several --ray-noise prices (NOISE, default
+# "0.5 1 2"); every asset judged by eval against one fixed reference (--rays 8192, --points
+# 20000, its seed fixed), so the columns compare the assets, not references.
 # Usage: bench/early_stop.sh [build dir] [scenes...]; FIT=point (the default) or FIT=lsq; SEED (default 0)
 # is every bake's --seed (eval's reference keeps its own); EXTRA more bake options (e.g. "--signal ao").
 set -euo pipefail
@@ -16,7 +16,7 @@ printf '%-16s %-44s %12s %10s %8s %s\n' scene config rays eval_% bake_s distribu
 for s in $scenes; do
   src=../shared/scenes/$s
   configs=("--rays-fixed 1024" "--rays-fixed 512")
-  for n in ${NOISE:-0.5 1 2}; do configs+=("--first-rays 32 --rays 1024 --ray-noise $n"); done
+  for n in ${NOISE:-0.5 1 2}; do configs+=("--first-rays ${FIRST:-32} --rays 1024 --ray-noise $n"); done
   for cfg in "${configs[@]}"; do
     name=${s%.*}_$(echo "$cfg ${EXTRA:-}" | tr -d ' -')_${fit}_s${SEED:-0}
     # shellcheck disable=SC2086
