@@ -71,16 +71,12 @@ DoublingLattice doubling_lattice(uint32_t base, int doublings) {
 
 Eigen::Vector2d doubling_lattice_point(uint32_t n, const DoublingLattice& l) {
   if (l.base == 0) throw std::out_of_range("doubling_lattice_point: an empty lattice");
+  // n's binary digits above the base, from the top: each set one is a doubling's offset.
   Eigen::Vector2d moved(0, 0);
   uint64_t m = n;
-  while (m >= l.base) {
-    size_t j = 0;
-    uint64_t M = l.base;
-    while (2 * M <= m) M *= 2, ++j;
-    if (j >= l.offsets.size()) throw std::out_of_range("doubling_lattice_point: point beyond the lattice's doublings");
-    moved += l.offsets[j];
-    m -= M;
-  }
+  for (size_t j = l.offsets.size(); j-- > 0;)
+    if (m >= uint64_t(l.base) << j) moved += l.offsets[j], m -= uint64_t(l.base) << j;
+  if (m >= l.base) throw std::out_of_range("doubling_lattice_point: point beyond the lattice's doublings");
   const uint64_t g = l.generator;
   Eigen::Vector2d p(double(m) / double(l.base) + moved.x(), double((m * g) % l.base) / double(l.base) + moved.y());
   return p - p.array().floor().matrix();  // no half-cell offset: it would not nest

@@ -86,7 +86,8 @@ RaySequence ray_sequence(const TransferOptions& o) {
                        std::to_string(o.first_ray) + " to " + std::to_string(end) + " after a first round of " + std::to_string(R0));
     q.base[0] = q.base[1] = uint32_t(R0 / 2);
   }
-  for (int h = 0; h < 2; ++h) q.lattices[h] = doubling_lattice(q.base[h], doublings);
+  q.lattices[0] = doubling_lattice(q.base[0], doublings);
+  q.lattices[1] = q.base[1] == q.base[0] ? q.lattices[0] : doubling_lattice(q.base[1], doublings);  // the same lattice, once
   if (o.estimator != TransferEstimator::MonteCarlo)
     for (uint64_t k = 0; k < R; ++k) {
       const uint64_t g = q.first + k, h = g & 1;
