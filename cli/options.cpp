@@ -162,6 +162,8 @@ void BakeCli::add_refinement(ArgParser& args) {
               1e-6, 1.0);
   args.choice("--simplify-metric", "adaptive below the input: rank collapses by the transfer's change and the geometry, or the "
               "geometry alone", &bake.simplify.metric, {SimplifyMetric::Transfer, SimplifyMetric::Geometry}, simplify_metric_name);
+  args.flag("--lock-corners", "adaptive below the input, auto: never collapse a vertex where three or more creases or seams\n"
+            "meet (by default it may, along one of them, its other sides' render vertices moving with it)", &lock_corners_);
   args.option("--min-angle", "A", "adaptive below the input: no collapse makes a face with an angle below A degrees",
               &bake.simplify.min_angle_deg, 0.0, 59.0);
   args.option("--geometry-weight", "W", "adaptive below the input, transfer metric: weight of the quadric against the transfer's change",
@@ -253,6 +255,7 @@ BakeOptions BakeCli::options() const {
   o.bounce.fit_samples = !bounce_vertices_only_;
   o.fit.control_variate = !no_control_variate_;
   o.fit.weigh_by_noise = !no_noise_weighting_;
+  o.simplify.collapse_corners = !lock_corners_;
   o.unshadowed_projection = !no_unshadowed_projection_;
   o.source = input;
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)

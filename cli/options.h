@@ -46,7 +46,7 @@ struct BakeCli {
   BakeOptions options() const;
 
  private:
-  bool no_control_variate_ = false, no_noise_weighting_ = false, bounce_vertices_only_ = false, no_unshadowed_projection_ = false;
+  bool no_control_variate_ = false, no_noise_weighting_ = false, bounce_vertices_only_ = false, no_unshadowed_projection_ = false, lock_corners_ = false;
   int rays_fixed_ = 0;  // --rays-fixed R: no early stop
   bool rays_given_ = false;         // --rays: else --error chooses the first round
   bool sample_rays_given_ = false;  // --sample-rays: else the pilot chooses

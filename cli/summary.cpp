@@ -224,6 +224,8 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
       r.set("simplify_min_angle_deg", o.simplify.min_angle_deg);
       r.set("collapses", st.collapses);
       r.set("locked_vertices", st.locked_vertices);
+      r.set("corner_collapses", st.corner_collapses);
+      r.set("moved_vertices", st.moved.size());
       r.set("kept_faces", st.kept_faces);
       r.set("min_angle_after_deg", st.min_angle_after_deg);
       r.set("faces_below_min_angle", st.faces_below_min_angle);
@@ -343,7 +345,9 @@ void print_bake_summary(const Report& r) {
            "triangulated"});
   if (adaptive && r.format("{simplified}") == "yes")
     r.print(stdout, {"  simplify:   to the budget, metric {simplify_metric}: {collapses} half-edge collapses (OpenMesh's Decimater), "
-                     "{locked_vertices} vertices locked (crease corners and ends), {kept_faces} faces kept as they were",
+                     "{corner_collapses} of crease corners ({moved_vertices} render vertices moved and traced again there),",
+                     "              {locked_vertices} vertices locked (ends of creases, creases at a boundary), {kept_faces} faces kept "
+                     "as they were",
                      "              min angle {min_angle_after_deg:3}° after ({faces_below_min_angle} faces below "
                      "{simplify_min_angle_deg:1}°, none worse than the faces a collapse replaced); {seconds_simplify:3} s",
                      "              guards refused (per evaluation): {refused_flip} flips, {refused_angle} angles, "

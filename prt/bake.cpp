@@ -439,8 +439,10 @@ void refine_rekeyed(const RayScene& scene, const BakeOptions& o, const BakeProgr
 }
 
 // A budget below the input's: collapse where the transfer does not change. Surviving vertices
-// keep their traced transfer and its variance.
-void simplify_adaptively(const BakeOptions& o, BakeResult& r, const ProgressFn& progress) {
+// keep their traced transfer and its variance; the render vertices a crease corner's collapse
+// moved onto a neighbour's position (an input vertex, so on the source surface) are traced again
+// there, with their own normals.
+void simplify_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& r, const ProgressFn& progress) {
   SimplifyOptions so = o.simplify;
   so.budget = o.adaptive.budget;
   so.value_scale = unshadowed_norm(o.transfer.order);
@@ -452,6 +454,25 @@ void simplify_adaptively(const BakeOptions& o, BakeResult& r, const ProgressFn& 
     if (to[i] != UINT32_MAX) variance[to[i]] = r.point_variance[i], rays[to[i]] = r.vertex_rays[i];
   r.point_variance = std::move(variance);
   r.vertex_rays = std::move(rays);
+  if (!r.simplify.moved.empty() && r.transfer.cols() > 0) {
+    const std::vector<uint32_t>& moved = r.simplify.moved;
+    const RowMatrixX3d offsets = vertex_offset_directions(r.mesh);
+    RowMatrixX3d points(Eigen::Index(moved.size()), 3), normals(Eigen::Index(moved.size()), 3), off(Eigen::Index(moved.size()), 3);
+    for (size_t i = 0; i < moved.size(); ++i) {
+      points.row(Eigen::Index(i)) = r.mesh.positions.row(r.mesh.vertex_position[moved[i]]);
+      normals.row(Eigen::Index(i)) = r.mesh.normals.row(moved[i]);
+      off.row(Eigen::Index(i)) = offsets.row(moved[i]);
+    }
+    TransferStats st;
+    std::vector<double> v;
+    const TransferOptions t = first_round(o);
+    const RowMatrixXd traced = shadowed_transfer(scene, points, normals, t, &st, {}, &off, &v);
+    for (size_t i = 0; i < moved.size(); ++i) {
+      r.transfer.row(moved[i]) = traced.row(Eigen::Index(i));
+      r.point_variance[moved[i]] = v[i], r.vertex_rays[moved[i]] = t.rays;
+    }
+    r.rays += st.rays;
+  }
   if (!r.simplify.warning.empty()) r.warnings.push_back(r.simplify.warning);
 }
 
@@ -472,7 +493,7 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
   down.simplify.max_surface_tolerance = down.simplify.surface_tolerance;
   if (progress.stage) progress.stage("simplify", 0);
   if (down.adaptive.budget < F) {
-    simplify_adaptively(down, r, progress.add);
+    simplify_adaptively(scene, down, r, progress.add);
     if (!r.simplify.warning.empty()) r.warnings.pop_back();  // the share is a target, not a promise
   }
   if (r.mesh.num_faces() > T) {  // it could not go below the budget on the way down: the budget is the promise
@@ -480,7 +501,7 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
     const bool ran = r.simplified;
     down.adaptive.budget = T;
     down.simplify.max_surface_tolerance = o.simplify.max_surface_tolerance;
-    simplify_adaptively(down, r, progress.add);
+    simplify_adaptively(scene, down, r, progress.add);
     if (ran) r.simplify.collapses += first.collapses, r.simplify.faces_before = first.faces_before, r.simplify.seconds += first.seconds;
   }
   if (r.mesh.num_faces() < T) refine_adaptively(scene, o, r, r.simplified && r.simplify.collapses > 0 ? &source : nullptr);
@@ -1087,7 +1108,7 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   if (o.refine == Refinement::Adaptive) {
     if (o.adaptive.budget < r.mesh.num_faces()) {
       if (progress.stage) progress.stage("simplify", 0);
-      simplify_adaptively(o, r, progress.add);
+      simplify_adaptively(scene, o, r, progress.add);
     } else if (o.rekey_share > 0 && o.rekey_share < 1 && o.bounce.bounces > 0 &&
                static_cast<size_t>(o.rekey_share * double(o.adaptive.budget)) > r.mesh.num_faces()) {
       refine_rekeyed(scene, o, progress, r);

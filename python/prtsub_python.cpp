@@ -139,6 +139,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "auto_share") o.auto_share = value.cast<double>();
     else if (key == "simplify_metric") o.simplify.metric = parse_simplify_metric(value.cast<std::string>());
     else if (key == "min_angle") o.simplify.min_angle_deg = value.cast<double>();
+    else if (key == "lock_corners") o.simplify.collapse_corners = !value.cast<bool>();
     else if (key == "simplify_alpha") o.simplified_alpha = value.cast<double>();
     else if (key == "error") o.target_error = value.cast<double>();
     else if (key == "sample_rays") {
@@ -166,7 +167,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, basis, sg_signed, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
+                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, basis, sg_signed, fit, alpha, refine, budget, levels, auto_share, simplify_metric, min_angle, lock_corners, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");
@@ -335,7 +336,7 @@ PYBIND11_MODULE(prtsub, m) {
       "Options: order (N or 'auto'), max_order, order_tolerance, rays, seed, threads, signal ('transfer'|'ao'), basis ('sh'|'sg:N': N\n"
       "spherical-Gaussian lobes, point values), sg_signed, fit ('point'|'average'|'lsq'), alpha,\n"
       "refine ('none'|'adaptive'|'uniform'), budget (below the input's count: simplify), levels, simplify_metric\n"
-      "('transfer'|'geometry'), min_angle, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo (A, 'vertex', 'R,G,B' or\n"
+      "('transfer'|'geometry'), min_angle, lock_corners, simplify_alpha, error (target %), sample_rays, bounces (N or 'auto'), albedo (A, 'vertex', 'R,G,B' or\n"
       "(R, G, B)), albedo_map (a diffuse texture through the UVs), source.");
 
   m.def("load", [](const std::string& path) {

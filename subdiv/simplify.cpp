@@ -4,7 +4,13 @@
 // corners (and source face) beside it, so creases and UV seams survive: a position edge whose
 // two faces do not share render vertices is a feature, and OpenMesh's own rule lets a feature
 // vertex collapse only along a feature edge. Faces OpenMesh cannot take (non-manifold edges or
-// vertices, repeated corners) stay out of it, unchanged, with their vertices locked.
+// vertices, repeated corners) stay out of it, unchanged, with their vertices locked. A crease's
+// end and a crease meeting a boundary are locked too (where they would slide is not one line).
+// A corner (three or more creases) may collapse along one of its creases: the faces beyond the
+// other creases keep their own render vertex, which moves with the position to p1; its value
+// is estimated by those faces' linear extension to p1 for ranking, and the caller traces it
+// again there (SimplifyStats::moved). After each collapse the feature flags around v1 are
+// recomputed, since a collapse can merge or end a crease.
 //
 // One non-binary module ranks a collapse of v0 into v1 (Vanhoey et al. 2012, section 4.1):
 //   E_signal = Σ_t area(t) · ‖L(p0) − L_t(p0)‖² over the faces t the collapse changes, where
@@ -69,12 +75,15 @@ inline Eigen::Vector3d vec(const OMesh::Point& p) { return {p[0], p[1], p[2]}; }
 
 // Everything the module reads: the input, and each OpenMesh face's corners as our mesh has them.
 struct State {
-  const RowMatrixXd* values = nullptr;
+  RowMatrixXd* values = nullptr;  // a corner collapse's moved render vertices get new estimates
   SimplifyOptions options;
   double diagonal = 1, cos_min_angle = 1, surface_tolerance = 0;
   std::vector<std::array<uint32_t, 3>> corner_pos, corner_render;  // per OpenMesh face, our corner order
   std::vector<uint32_t> source;                                     // per OpenMesh face
   std::vector<char> feature;                                        // per OpenMesh edge
+  std::vector<uint32_t> render_pos;  // per input render vertex: its position now (a corner collapse moves some)
+  std::vector<char> moved;           // per input render vertex: a corner collapse moved it
+  size_t corner_collapses = 0;
   size_t refused_flip = 0, refused_angle = 0, refused_line = 0, refused_side = 0, refused_surface = 0;  // evaluations refused
 
   uint32_t render_at(FaceHandle f, VertexHandle v) const {
@@ -105,6 +114,35 @@ double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, cons
   return (a + t * d - p).norm();
 }
 
+// Whether edge e is a feature: its two faces see different render vertices at an end.
+bool is_feature(const OMesh& m, const State& s, OMesh::EdgeHandle e) {
+  const HalfedgeHandle h = m.halfedge_handle(e, 0);
+  const FaceHandle f = m.face_handle(h), g = m.face_handle(m.opposite_halfedge_handle(h));
+  if (!f.is_valid() || !g.is_valid()) return false;
+  const VertexHandle a = m.from_vertex_handle(h), b = m.to_vertex_handle(h);
+  return s.render_at(f, a) != s.render_at(g, a) || s.render_at(f, b) != s.render_at(g, b);
+}
+
+// Why a vertex cannot move: a feature's end, or a feature meeting a boundary (where it would
+// slide is not a line); with corners locked, three or more features meeting too.
+bool locks(const OMesh& m, const State& s, VertexHandle v, int features) {
+  return features == 1 || (features > 0 && m.is_boundary(v)) || (features > 2 && !s.options.collapse_corners);
+}
+
+// v's edges' feature flags and v's own, after a collapse changed its neighbourhood (a vertex
+// locked once stays locked).
+void update_features(OMesh& m, State& s, VertexHandle v) {
+  int n = 0;
+  for (OMesh::VertexEdgeIter e = m.ve_iter(v); e.is_valid(); ++e) {
+    const bool f = is_feature(m, s, *e);
+    s.feature[size_t(e->idx())] = f;
+    m.status(*e).set_feature(f);
+    n += f;
+  }
+  m.status(v).set_feature(n > 0);
+  if (locks(m, s, v, n)) m.status(v).set_locked(true);
+}
+
 class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
  public:
   typedef ModTransfer Self;
@@ -126,6 +164,7 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
     const OMesh& m = Base::mesh();
     const Eigen::Vector3d p0 = vec(ci.p0), p1 = vec(ci.p1);
     const Eigen::Index K = s_->values->cols();
+    if (moves_) estimate_moved(ci);
     double e_geom = 0, e_signal = 0;
     for (const auto& [f, r1] : changed_) {
       const auto& pos = s_->corner_pos[size_t(f.idx())];
@@ -145,7 +184,7 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
         Eigen::Matrix<double, 3, 2> J;
         J.col(0) = pa - p1, J.col(1) = pb - p1;
         const Eigen::Vector2d c = (J.transpose() * J).ldlt().solve(J.transpose() * (p0 - p1));
-        const double* l1 = s_->values->row(r1).data();
+        const double* l1 = r1 == ren[k0] ? moved_value(r1) : s_->values->row(r1).data();
         const double* la = s_->values->row(ren[ka]).data();
         const double* lb = s_->values->row(ren[kb]).data();
         const double* l0 = s_->values->row(ren[k0]).data();
@@ -180,11 +219,28 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
   // side of a crease), before OpenMesh forgets which faces those were.
   void preprocess_collapse(const CollapseInfo& ci) override {
     if (!sides(ci)) return;  // cannot happen for a collapse this module allowed
+    s_->corner_collapses += moves_;
+    if (moves_) {
+      estimate_moved(ci);
+      for (size_t i = 0; i < moved_.size(); ++i) s_->values->row(moved_[i]) = moved_values_.row(Eigen::Index(i));
+    }
     for (const auto& [f, r1] : changed_) {
       auto& pos = s_->corner_pos[size_t(f.idx())];
-      for (int k = 0; k < 3; ++k)
-        if (pos[k] == uint32_t(ci.v0.idx())) pos[k] = uint32_t(ci.v1.idx()), s_->corner_render[size_t(f.idx())][k] = r1;
+      auto& ren = s_->corner_render[size_t(f.idx())];
+      for (int k = 0; k < 3; ++k) {
+        if (pos[k] != uint32_t(ci.v0.idx())) continue;
+        if (ren[k] == r1) s_->render_pos[r1] = uint32_t(ci.v1.idx()), s_->moved[r1] = 1;  // a corner's side, moved
+        pos[k] = uint32_t(ci.v1.idx()), ren[k] = r1;
+      }
     }
+  }
+
+  // The collapse is done: edges around v1 merged where faces went, and a corner's creases now
+  // meet at v1, so which edges are features, and which vertices lie on them, is looked at again.
+  void postprocess_collapse(const CollapseInfo& ci) override {
+    OMesh& m = Base::mesh();
+    update_features(m, *s_, ci.v1);
+    for (OMesh::VertexVertexIter w = m.vv_iter(ci.v1); w.is_valid(); ++w) update_features(m, *s_, *w);
   }
 
  private:
@@ -238,12 +294,68 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
         }
       }
     }
+    // A face neither side reaches lies beyond another crease at a corner: it keeps v0's render
+    // vertex of its side, which moves to v1 (unless a reached face uses it too).
+    moves_ = false;
     for (const auto& [f, label] : ring_) {
       if (f == ci.fl || f == ci.fr) continue;
-      if (label < 0 || render[label] == UINT32_MAX) return false;
+      if (label >= 0 && render[label] == UINT32_MAX) return false;
+      if (label < 0) {
+        if (!s_->options.collapse_corners) return false;
+        const uint32_t own = s_->render_at(f, ci.v0);
+        for (const auto& [g, other] : ring_)
+          if (other >= 0 && s_->render_at(g, ci.v0) == own) return false;
+        changed_.push_back({f, own});
+        moves_ = true;
+        continue;
+      }
       changed_.push_back({f, render[label]});
     }
     return true;
+  }
+
+  // A corner's side that moves to v1 keeps its render vertex, whose value is then expected to be
+  // what that side's faces extend to at p1 (their constant gradients, area-weighted), as the
+  // caller traces it there: a linear signal's faces are then unchanged.
+  void estimate_moved(const CollapseInfo& ci) {
+    const OMesh& m = Base::mesh();
+    const Eigen::Index K = s_->values->cols();
+    moved_.clear();
+    moved_values_.setZero(0, K);
+    std::vector<double> weight;
+    const Eigen::Vector3d p0 = vec(ci.p0), p1 = vec(ci.p1);
+    for (const auto& [f, r1] : changed_) {
+      const auto& pos = s_->corner_pos[size_t(f.idx())];
+      const auto& ren = s_->corner_render[size_t(f.idx())];
+      int k0 = 0;
+      while (pos[k0] != uint32_t(ci.v0.idx())) ++k0;
+      if (ren[k0] != r1) continue;
+      size_t i = 0;
+      while (i < moved_.size() && moved_[i] != r1) ++i;
+      if (i == moved_.size()) {
+        moved_.push_back(r1), weight.push_back(0);
+        moved_values_.conservativeResize(Eigen::Index(moved_.size()), K);
+        moved_values_.row(Eigen::Index(i)).setZero();
+      }
+      const int ka = (k0 + 1) % 3, kb = (k0 + 2) % 3;
+      const Eigen::Vector3d pa = vec(m.point(VertexHandle(int(pos[ka])))), pb = vec(m.point(VertexHandle(int(pos[kb]))));
+      Eigen::Matrix<double, 3, 2> J;
+      J.col(0) = pa - p0, J.col(1) = pb - p0;
+      const double area = 0.5 * J.col(0).cross(J.col(1)).norm();
+      if (!(area > 0)) continue;
+      const Eigen::Vector2d c = (J.transpose() * J).ldlt().solve(J.transpose() * (p1 - p0));
+      const auto l0 = s_->values->row(ren[k0]), la = s_->values->row(ren[ka]), lb = s_->values->row(ren[kb]);
+      moved_values_.row(Eigen::Index(i)) += area * (l0 + c[0] * (la - l0) + c[1] * (lb - l0));
+      weight[i] += area;
+    }
+    for (size_t i = 0; i < moved_.size(); ++i)
+      moved_values_.row(Eigen::Index(i)) = weight[i] > 0 ? Eigen::RowVectorXd(moved_values_.row(Eigen::Index(i)) / weight[i])
+                                                           : Eigen::RowVectorXd(s_->values->row(moved_[i]));
+  }
+  const double* moved_value(uint32_t r) const {
+    size_t i = 0;
+    while (moved_[i] != r) ++i;
+    return moved_values_.row(Eigen::Index(i)).data();
   }
 
   // A boundary or feature vertex may only slide along its line: the line's other edge at v0,
@@ -268,6 +380,9 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
   double worst_ = -1;
   HalfedgeHandle worst_for_;  // worst_ is of this collapse (cleared by every priority call)
   std::vector<std::pair<FaceHandle, uint32_t>> changed_;
+  bool moves_ = false;  // changed_ moves a corner's render vertex
+  std::vector<uint32_t> moved_;  // those render vertices, and their estimated values at p1
+  RowMatrixXd moved_values_;
   std::vector<std::pair<FaceHandle, int>> ring_;
   std::vector<FaceHandle> stack_;
 };
@@ -298,6 +413,7 @@ bool boundary_collapse(OMesh& m, ModTransfer& module) {
   ModTransfer::CollapseInfo ci(m, best);
   module.preprocess_collapse(ci);
   m.collapse(best);
+  module.postprocess_collapse(ci);
   return true;
 }
 
@@ -378,17 +494,15 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
 
   // Features: edges whose two faces see different render vertices at an end.
   s.feature.assign(om.n_edges(), 0);
+  s.render_pos = mesh.vertex_position;
+  s.moved.assign(mesh.num_vertices(), 0);
   std::vector<int> feature_edges(om.n_vertices(), 0);
   for (OMesh::EdgeIter e = om.edges_begin(); e != om.edges_end(); ++e) {
+    if (!is_feature(om, s, *e)) continue;
+    s.feature[size_t(e->idx())] = 1;
+    om.status(*e).set_feature(true);
     const HalfedgeHandle h = om.halfedge_handle(*e, 0);
-    const FaceHandle f = om.face_handle(h), g = om.face_handle(om.opposite_halfedge_handle(h));
-    if (!f.is_valid() || !g.is_valid()) continue;
-    const VertexHandle a = om.from_vertex_handle(h), b = om.to_vertex_handle(h);
-    if (s.render_at(f, a) != s.render_at(g, a) || s.render_at(f, b) != s.render_at(g, b)) {
-      s.feature[size_t(e->idx())] = 1;
-      om.status(*e).set_feature(true);
-      ++feature_edges[size_t(a.idx())], ++feature_edges[size_t(b.idx())];
-    }
+    ++feature_edges[size_t(om.from_vertex_handle(h).idx())], ++feature_edges[size_t(om.to_vertex_handle(h).idx())];
   }
   std::vector<char> lock(om.n_vertices(), 0);
   for (uint32_t f : kept)
@@ -396,8 +510,7 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
   for (OMesh::VertexIter v = om.vertices_begin(); v != om.vertices_end(); ++v) {
     const int n = feature_edges[size_t(v->idx())];
     if (n > 0) om.status(*v).set_feature(true);
-    // A feature's corner or end, or a feature meeting a boundary: where it would slide is not a line.
-    if ((n > 0 && n != 2) || (n > 0 && om.is_boundary(*v)) || om.is_isolated(*v)) lock[size_t(v->idx())] = 1;
+    if (locks(om, s, *v, n) || om.is_isolated(*v)) lock[size_t(v->idx())] = 1;
   }
   for (OMesh::VertexIter v = om.vertices_begin(); v != om.vertices_end(); ++v)
     if (lock[size_t(v->idx())]) om.status(*v).set_locked(true), stats.locked_vertices += !om.is_isolated(*v);
@@ -468,7 +581,7 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
       if (render_to[v] == UINT32_MAX) {
         render_to[v] = uint32_t(render_order.size());
         render_order.push_back(v);
-        const uint32_t p = mesh.vertex_position[v];
+        const uint32_t p = s.render_pos[v];
         if (pos_to[p] == UINT32_MAX) pos_to[p] = uint32_t(pos_order.size()), pos_order.push_back(p);
       }
       v = render_to[v];
@@ -483,7 +596,8 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
   RowMatrixXd vals(static_cast<Eigen::Index>(render_order.size()), values.cols());
   for (size_t i = 0; i < render_order.size(); ++i) {
     const uint32_t v = render_order[i];
-    out.vertex_position[i] = pos_to[mesh.vertex_position[v]];
+    out.vertex_position[i] = pos_to[s.render_pos[v]];
+    if (s.moved[v]) stats.moved.push_back(uint32_t(i));
     out.normals.row(Eigen::Index(i)) = mesh.normals.row(v);
     if (mesh.has_uv()) out.uv.row(Eigen::Index(i)) = mesh.uv.row(v);
     if (mesh.has_colors()) out.colors.row(Eigen::Index(i)) = mesh.colors.row(v);
@@ -497,6 +611,7 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
 
   stats.refused_flip = s.refused_flip, stats.refused_angle = s.refused_angle, stats.refused_line = s.refused_line;
   stats.refused_crease_side = s.refused_side, stats.refused_surface = s.refused_surface;
+  stats.corner_collapses = s.corner_collapses;
   stats.surface_tolerance = s.surface_tolerance / s.diagonal;
   stats.faces_after = mesh.num_faces();
   stats.min_angle_after_deg = min_angle_deg(mesh);

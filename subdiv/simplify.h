@@ -35,12 +35,22 @@ struct SimplifyOptions {
   //! no collapse puts the kept vertex further than this share of the diagonal off the plane of
   //! a face the removed one had; while the budget is not reached it doubles, up to the maximum
   double surface_tolerance = 5e-3, max_surface_tolerance = 0.04;
+  //! a vertex where three or more creases or seams meet may collapse along one of them, under the
+  //! same line and surface tolerances; its sides that the kept vertex has no render vertex for
+  //! keep their own render vertex, moved to the kept position (SimplifyStats::moved). False locks
+  //! such corners, as ends of a line and features meeting a boundary always are
+  bool collapse_corners = true;
 };
 
 struct SimplifyStats {
   size_t faces_before = 0, faces_after = 0, collapses = 0;
   double surface_tolerance = 0;  //!< the share of the diagonal the surface tolerance ended at
-  size_t locked_vertices = 0;    //!< crease corners, ends and non-manifold faces' vertices: never removed
+  size_t locked_vertices = 0;    //!< vertices never removed: ends of creases or seams, features meeting a boundary,
+                                 //!< non-manifold faces' vertices (and crease corners, without collapse_corners)
+  size_t corner_collapses = 0;   //!< collapses of a crease corner (collapse_corners)
+  //! output render vertices a corner collapse moved to a neighbour's position: each keeps its normal,
+  //! UVs and the value it had at its old one, which the caller should trace again there
+  std::vector<uint32_t> moved;
   size_t kept_faces = 0;         //!< faces OpenMesh could not take (non-manifold, repeated corners): kept as they are
   double min_angle_after_deg = 0;
   size_t faces_below_min_angle = 0;  //!< after: none worse than the faces a collapse replaced
@@ -60,7 +70,9 @@ struct SimplifyStats {
 //! (doubled, up to its maximum, while the budget is not reached), a boundary or feature line moving by more than feature_tolerance, and
 //! OpenMesh's own link condition (so a manifold input stays manifold). Creases and UV seams
 //! (position edges whose faces do not share render vertices) are features: their vertices only
-//! slide along them, and where three or more meet, or one ends, the vertex is locked. Each
+//! slide along them; where one ends (or meets a boundary) the vertex is locked, and where three or
+//! more meet it collapses along one of them (options.collapse_corners), moving the render vertices
+//! of its other sides to the kept position (stats.moved). Each
 //! output face keeps the source_face of the input face it was (faces are never created).
 //! \param values #V by K, may have no columns
 //! \param removed_to if given, receives for every input render vertex its output index, or

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <set>
 
 #include "helpers.h"
@@ -62,6 +63,7 @@ TEST(Simplify, ReachesTheBudgetExactlyAndKeepsSurvivingVerticesAsTheyWere) {
     EXPECT_EQ(m.num_faces(), budget);
     EXPECT_EQ(st.faces_after, budget);
     ASSERT_EQ(v.rows(), static_cast<Eigen::Index>(m.num_vertices()));
+    EXPECT_TRUE(st.moved.empty());  // no creases, so no corner's render vertex moved
     for (uint32_t i = 0; i < in.num_vertices(); ++i) {
       if (to[i] == UINT32_MAX) continue;
       EXPECT_EQ(m.point(to[i]), in.point(i));  // half-edge collapses move nothing
@@ -102,14 +104,19 @@ TEST(Simplify, GuardsNoFlipsManifoldMinimumAngleBoundariesAndCreases) {
   }
   EXPECT_GE(st.min_angle_after_deg, 15.0);  // the input's smallest is above it, so every face is
   EXPECT_EQ(st.faces_below_min_angle, 0u);
-  // A cube of 6 x 2 x 8 x 8 triangles: its corners are locked, its edges (creases) stay straight
-  // and keep one render vertex per side, so the cube keeps its exact shape.
+  // A cube of 6 x 2 x 8 x 8 triangles: its corners are kept by the line and surface tolerances
+  // (or locked, when corners may not collapse), its edges (creases) stay straight and keep one
+  // render vertex per side, so the cube keeps its exact shape.
+  for (bool corners : {true, false}) {
   Mesh c = test::build(tessellated_cube(8), 30.0);
   ASSERT_EQ(c.num_faces(), 768u);
   RowMatrixXd cv = values_of(c, [](const Eigen::Vector3d& p) { return p.x() * p.y() + p.z(); });
-  st = simplify(c, cv, SimplifyOptions{60});
+  SimplifyOptions co{60};
+  co.collapse_corners = corners;
+  st = simplify(c, cv, co);
   EXPECT_EQ(c.num_faces(), 60u) << st.warning;
-  EXPECT_EQ(st.locked_vertices, 8u);
+  EXPECT_EQ(st.locked_vertices, corners ? 0u : 8u);
+  EXPECT_EQ(st.corner_collapses, 0u);
   EXPECT_NEAR(test::total_area(c), 6.0, 1e-12);
   EXPECT_EQ(test::position_edges(c).boundary, 0u);
   for (Eigen::Index p = 0; p < c.positions.rows(); ++p) {  // every position on the cube's surface
@@ -120,12 +127,111 @@ TEST(Simplify, GuardsNoFlipsManifoldMinimumAngleBoundariesAndCreases) {
     const Eigen::Vector3d n = c.normals.row(i).transpose();
     EXPECT_NEAR(n.cwiseAbs().maxCoeff(), 1.0, 1e-12);
   }
-  std::set<uint32_t> corners;
+  std::set<uint32_t> cube_corners;
   for (uint32_t i = 0; i < c.num_vertices(); ++i) {
     const Eigen::Vector3d q = c.point(i);
-    if ((q.array() == 0 || q.array() == 1).all()) corners.insert(c.vertex_position[i]);
+    if ((q.array() == 0 || q.array() == 1).all()) cube_corners.insert(c.vertex_position[i]);
   }
-  EXPECT_EQ(corners.size(), 8u);
+  EXPECT_EQ(cube_corners.size(), 8u);
+  }
+}
+
+// A flat n×n grid in three UV charts: x < 1/2, and x > 1/2 split at y = 1/2. The seams meet at
+// (1/2, 1/2) in a T: a crease corner, with one render vertex per chart. Its render vertex of
+// the chart the collapse does not slide along moves to the kept position.
+Mesh three_charts(int n) {
+  const Mesh g = test::build(test::grid(n));
+  Mesh m = g;
+  auto chart = [&](const Triangle& t) {
+    const Eigen::Vector3d c = (g.point(t[0]) + g.point(t[1]) + g.point(t[2])) / 3;
+    return c.x() < 0.5 ? 0 : c.y() < 0.5 ? 1 : 2;
+  };
+  std::map<std::pair<uint32_t, int>, uint32_t> render;
+  m.vertex_position.clear();
+  std::vector<Eigen::Vector2d> uv;
+  for (Triangle& t : m.triangles) {
+    const int c = chart(t);
+    for (uint32_t& v : t) {
+      const uint32_t p = g.vertex_position[v];
+      auto [it, fresh] = render.try_emplace({p, c}, uint32_t(m.vertex_position.size()));
+      if (fresh) m.vertex_position.push_back(p), uv.push_back({g.positions(p, 0) + 2 * c, g.positions(p, 1)});
+      v = it->second;
+    }
+  }
+  m.normals = RowMatrixX3d(Eigen::Index(uv.size()), 3);
+  m.uv = RowMatrixX2d(Eigen::Index(uv.size()), 2);
+  for (size_t i = 0; i < uv.size(); ++i) {
+    m.normals.row(Eigen::Index(i)) = Eigen::RowVector3d(0, 0, 1);
+    m.uv.row(Eigen::Index(i)) = uv[i].transpose();
+  }
+  return m;
+}
+
+TEST(Simplify, ACreaseCornerCollapsesAlongOneCreaseAndItsOtherSideMovesWithIt) {
+  // Tolerances loose enough for the T's stem to give way (a real mesh's corner moves only where
+  // its creases stay within them: mori_knob's 738 all do at the defaults).
+  for (bool corners : {true, false}) {
+    Mesh m = three_charts(8);
+    const Mesh in = m;
+    RowMatrixXd v = values_of(m, [](const Eigen::Vector3d& p) { return p.x() + 2 * p.y(); });
+    SimplifyOptions o{4};
+    o.feature_tolerance = 0.3, o.min_angle_deg = 0, o.collapse_corners = corners;
+    std::vector<uint32_t> to;
+    const SimplifyStats st = simplify(m, v, o, &to);
+    bool centre = false;
+    for (Eigen::Index p = 0; p < m.positions.rows(); ++p) centre |= m.positions.row(p) == Eigen::RowVector3d(0.5, 0.5, 0);
+    if (!corners) {  // the T's corner is locked, with the seams' three ends on the boundary
+      EXPECT_TRUE(centre);
+      EXPECT_EQ(st.locked_vertices, 4u);
+      EXPECT_TRUE(st.moved.empty());
+      continue;
+    }
+    EXPECT_EQ(m.num_faces(), 4u) << st.warning;
+    EXPECT_FALSE(centre);  // the corner itself collapsed
+    EXPECT_EQ(st.locked_vertices, 3u);
+    EXPECT_GE(st.corner_collapses, 1u);
+    ASSERT_FALSE(st.moved.empty());
+    // Each face stays in one chart (the UVs' offset tells them apart), on the plane, facing up,
+    // and the faces tile their outline (the loose tolerance let the square's corners go): a
+    // manifold disk whose faces' areas sum to the area its boundary encloses.
+    std::map<std::pair<uint32_t, uint32_t>, int> directed;
+    for (const Triangle& t : m.triangles) {
+      EXPECT_EQ(std::floor(m.uv(t[0], 0) / 2), std::floor(m.uv(t[1], 0) / 2));
+      EXPECT_EQ(std::floor(m.uv(t[0], 0) / 2), std::floor(m.uv(t[2], 0) / 2));
+      EXPECT_GT((m.point(t[1]) - m.point(t[0])).cross(m.point(t[2]) - m.point(t[0])).z(), 0);
+      for (int k = 0; k < 3; ++k) ++directed[{m.vertex_position[t[k]], m.vertex_position[t[(k + 1) % 3]]}];
+    }
+    const EdgeCounts e = test::position_edges(m);
+    EXPECT_EQ(e.non_manifold + e.winding_conflicts, 0u);
+    EXPECT_EQ(long(m.positions.rows()) - long(e.edges) + long(m.num_faces()), 1);
+    double enclosed = 0;
+    for (const auto& [ab, n] : directed) {
+      if (directed.count({ab.second, ab.first})) continue;  // inner edge
+      const Eigen::RowVector3d a = m.positions.row(ab.first), b = m.positions.row(ab.second);
+      enclosed += 0.5 * (a.x() * b.y() - b.x() * a.y());
+    }
+    EXPECT_NEAR(test::total_area(m), enclosed, 1e-12);
+    // A moved render vertex keeps its chart's UVs, now stands where another input vertex stood
+    // (on the input surface, where the caller can trace it again), and its value is its faces'
+    // extended there: the linear signal's value at its new place.
+    std::set<uint32_t> moved(st.moved.begin(), st.moved.end());
+    size_t kept_in_place = 0;
+    for (uint32_t i = 0; i < in.num_vertices(); ++i) {
+      if (to[i] == UINT32_MAX) continue;
+      EXPECT_EQ(m.uv.row(to[i]), in.uv.row(i));
+      EXPECT_NEAR(v(to[i], 0), m.point(to[i]).x() + 2 * m.point(to[i]).y(), 1e-12);
+      if (!moved.count(to[i])) {
+        EXPECT_EQ(m.point(to[i]), in.point(i));
+        ++kept_in_place;
+        continue;
+      }
+      EXPECT_NE(m.point(to[i]), in.point(i));
+      bool an_input_position = false;
+      for (Eigen::Index p = 0; p < in.positions.rows(); ++p) an_input_position |= in.positions.row(p) == m.point(to[i]).transpose();
+      EXPECT_TRUE(an_input_position);
+    }
+    EXPECT_EQ(kept_in_place + moved.size(), m.num_vertices());
+  }
 }
 
 TEST(Simplify, TheTransferMetricKeepsVerticesWhereTheSignalChanges) {
