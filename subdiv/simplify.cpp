@@ -43,8 +43,9 @@
 #include <OpenMesh/Tools/Decimater/ModBaseT.hh>
 #include <OpenMesh/Tools/Decimater/Observer.hh>
 #include <algorithm>
-#include <functional>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 
 #include "prtsub/subdiv/exceptions.h"
 #include "prtsub/subdiv/refine.h"
@@ -72,6 +73,13 @@ using OpenMesh::HalfedgeHandle;
 using OpenMesh::VertexHandle;
 
 inline Eigen::Vector3d vec(const OMesh::Point& p) { return {p[0], p[1], p[2]}; }
+
+// A setting as a user typed it (5, 0.5), not std::to_string's six decimals.
+std::string short_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
 
 // Everything the module reads: the input, and each OpenMesh face's corners as our mesh has them.
 struct State {
@@ -561,8 +569,8 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
   }
   if (const size_t n = live_faces(om) + kept.size(); n > options.budget)
     stats.warning = "budget " + std::to_string(options.budget) + " not reached: the guards (flips, minimum angle " +
-                    std::to_string(options.min_angle_deg) + "°, boundaries and features, the surface moving by at most " +
-                    std::to_string(100 * options.max_surface_tolerance) + "% of the diagonal) allow no further collapse at " +
+                    short_number(options.min_angle_deg) + "°, boundaries and features, the surface moving by at most " +
+                    short_number(100 * options.max_surface_tolerance) + "% of the diagonal) allow no further collapse at " +
                     std::to_string(n) + " triangles";
 
   // Gather the surviving faces (OpenMesh's order, then the kept ones) and compact.
@@ -644,7 +652,7 @@ SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& o
     if (2 * (st.faces_after - std::max(rt.faces_after, options.budget)) >= st.faces_after - options.budget) {
       mesh = std::move(relaxed), values = std::move(relaxed_values), strict_to = std::move(relaxed_to), st = rt;
     } else {
-      st.warning += " (relaxing the surface tolerance to " + std::to_string(100 * options.max_surface_tolerance) +
+      st.warning += " (relaxing the surface tolerance to " + short_number(100 * options.max_surface_tolerance) +
                     "% of the diagonal only reached " + std::to_string(rt.faces_after) + ", kept the strict run)";
     }
   }
