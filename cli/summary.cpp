@@ -272,6 +272,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   }
   if (res.simplified && res.simplify.collapses > 0 && (o.refine != Refinement::Auto || res.refine.splits == 0)) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
+  else if (res.top_up.rays > 0) record(r, res.top_up);  // both ways: a second round without a pilot
   const bool early = early_stop_on(o);
   record_ray_spread(r, res.vertex_rays, early ? o.round_rays : o.transfer.rays);
   r.set("early_stop", early);
@@ -416,6 +417,9 @@ void print_bake_summary(const Report& r) {
                        "their summed variance x{top_up_variance_ratio:3}",
                        "              vertices by rays: 1x: {vertices_with_rays_1x}, 2x: {vertices_with_rays_2x}, 4x: "
                        "{vertices_with_rays_4x}, 8x: {vertices_with_rays_8x}, 16x+: {vertices_with_rays_16x_up}"});
+    else if (r.has("top_up_rays"))
+      r.print(stdout, {"              vertex rays: {top_up_rays} more at the {top_up_vertices} noisiest of the input's vertices "
+                       "({seconds_top_up:3} s); their summed variance x{top_up_variance_ratio:3}"});
     const std::string cg = r.has("fit_cg_note") ? r.format(", {fit_cg_iterations} {fit_cg_note}") : "";
     std::printf("%s\n", r.format("              solve {seconds_fit:3} s (assemble {seconds_fit_assemble:3}, factor "
                                  "{seconds_fit_factor:3}, solve {seconds_fit_solve:3}; {fit_solver}" + cg +

@@ -482,7 +482,8 @@ void simplify_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult
 // stops where it must), then refined to exactly the budget. The simplified surface lies within
 // its tolerance of the input, not on it, so refinement's new vertices are traced at their
 // closest points on the input (TransferSignalOptions::project_onto); the fit then samples the
-// input's surface (fit_to_source), as for any simplified mesh.
+// input's surface (fit_to_source), as for any simplified mesh, after a second round of rays at
+// the input's own vertices and with α chosen on a hold-out drawn there, as the default bake's.
 void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, BakeResult& r) {
   const size_t T = o.adaptive.budget, F = r.mesh.num_faces();
   BakeOptions down = o;
@@ -505,6 +506,37 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
     if (ran) r.simplify.collapses += first.collapses, r.simplify.faces_before = first.faces_before, r.simplify.seconds += first.seconds;
   }
   if (r.mesh.num_faces() < T) refine_adaptively(scene, o, r, r.simplified && r.simplify.collapses > 0 ? &source : nullptr);
+}
+
+// Both ways, the fit's α is chosen as the default bake's is (fit_bake_values), on samples held
+// out of the source surface: as many as the asset has faces (at least 4096, at most the pilot's
+// hold-out), traced at the pilot's rays with seeds no other rays share, each located on the
+// asset by its closest facing point. The hold-out weighs each by the source area it stands for,
+// as eval does. Where the transfer is dense already (chinese_dragon) no regulariser is best, where
+// the vertices are noisy (bunny) a little is (docs/simplification.md).
+Holdout source_holdout(const Mesh& source, const RayScene& scene, const Mesh& mesh, const BakeOptions& o, TransferStats* stats) {
+  SampleOptions so;
+  so.min_per_triangle = 0;
+  const double wanted = double(std::min(o.pilot.holdout, std::max<size_t>(4096, mesh.num_faces())));
+  so.per_triangle = wanted / double(std::max<size_t>(source.num_faces(), 1));
+  so.seed = mix64(o.samples.seed + 0x401Dull);
+  const SurfaceSamples s = make_surface_samples(source, so);
+  TransferOptions to = first_round(o);
+  to.rays = std::max(o.pilot.rays, 2);
+  to.seed = mix64(o.transfer.seed ^ 0x401D011ull);
+  to.stream_offset = 0;
+  std::vector<double> variance;
+  const RowMatrixXd values = shadowed_transfer(scene, s.points, s.normals, to, stats, {}, &s.offsets, &variance);
+  const std::vector<SurfaceLocation> at = closest_points(mesh, s.points, o.transfer.threads, &s.normals);
+  Holdout h;
+  h.rays = to.rays;
+  h.face.resize(at.size());
+  h.barycentric.resize(Eigen::Index(at.size()), 3);
+  for (size_t k = 0; k < at.size(); ++k) h.face[k] = at[k].face, h.barycentric.row(Eigen::Index(k)) = at[k].barycentric.transpose();
+  h.weight = s.weight;
+  h.variance = std::move(variance);
+  h.values = values.cast<float>();
+  return h;
 }
 
 // The fit of a simplified mesh: samples on the *source* surface (traced there, so they see the
@@ -571,8 +603,34 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   fo.alpha = both_ways ? o.fit.alpha : o.simplified_alpha;
   // The samples lie on the input, whose normals are not the asset's: t_u is not known there.
   fo.unshadowed_order = 0;
-  r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, fo, &r.fit, both_ways ? &r.point_variance : nullptr);
-  r.alpha = fo.alpha;
+  if (both_ways && o.vertex_share > 0 && o.fit.method == FitMethod::LeastSquares) {
+    // A second round of vertex rays, as the default bake's (fit): at most the vertices' own rays
+    // again, where their noise costs most. Refinement's new vertices were traced at their closest
+    // points on the input, not where they stand, so only the input's own vertices take part.
+    const size_t first_new = r.mesh.num_vertices() - std::min(r.mesh.num_vertices(), r.refine.new_vertices);
+    std::vector<double> planning = smoothed_variance(r.mesh, r.point_variance, r.vertex_rays);
+    double traced = 0;
+    for (size_t i = 0; i < first_new; ++i) traced += r.vertex_rays[i];
+    std::fill(planning.begin() + std::ptrdiff_t(first_new), planning.end(), 0.0);
+    const TopUpPlan plan = plan_top_up(planning, r.vertex_rays, static_cast<uint64_t>(traced), vertex_areas(r.mesh), 16.0 * o.transfer.rays);
+    if (progress.stage) progress.stage("vertex rays", plan.vertices);
+    r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.point, r.point_variance, r.vertex_rays, progress.add);
+    r.rays += r.top_up.rays;
+    r.seconds_top_up = clock.lap();
+  }
+  const bool choose = both_ways && o.alpha_auto && fo.method == FitMethod::LeastSquares && !o.alpha_choices.empty() && r.fit_data.samples.size() > 0;
+  if (choose) {
+    if (progress.stage) progress.stage("hold-out", 0);
+    TransferStats held;
+    r.fit_data.plan.holdout = source_holdout(source, scene, r.mesh, o, &held);
+    r.rays += held.rays;
+    BakeOptions chosen = o;
+    chosen.fit = fo;
+    r.transfer = fit_bake_values(r.mesh, r.fit_data, r.point, r.point_variance, chosen, &r.fit, &r.alpha, &r.alpha_trials);
+  } else {
+    r.transfer = fit_vertex_values(r.mesh, r.fit_data.samples, r.fit_data.moments, r.point, fo, &r.fit, both_ways ? &r.point_variance : nullptr);
+    r.alpha = fo.alpha;
+  }
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
 }
@@ -967,8 +1025,7 @@ RowMatrixXd fit_bake_values(const Mesh& mesh, const FitData& data, const RowMatr
   const std::vector<double>* variance = prior_variance.size() == mesh.num_vertices() ? &prior_variance : nullptr;
   // (Without samples — the pilot's screen stopped it, or it found no face — nothing is fitted
   // and every α gives the same values: no trials.)
-  const bool choose = o.alpha_auto && o.fit.method == FitMethod::LeastSquares && data.allocation == SampleAllocation::Pilot &&
-                      data.plan.holdout.size() > 0 && !o.alpha_choices.empty() && data.samples.size() > 0;
+  const bool choose = o.alpha_auto && o.fit.method == FitMethod::LeastSquares && data.plan.holdout.size() > 0 && !o.alpha_choices.empty() && data.samples.size() > 0;
   if (alpha) *alpha = o.fit.alpha;
   if (trials) trials->clear();
   if (!choose) return fit_vertex_values(mesh, data.samples, data.moments, prior, o.fit, stats, variance);
@@ -1132,7 +1189,10 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
     return r;
   }
   if (o.fit.method != FitMethod::Point) {
-    if (r.simplified && r.simplify.collapses > 0) fit_to_source(mesh, scene, o, progress, clock, r);
+    if (r.simplified && r.simplify.collapses > 0) {
+      fit_to_source(mesh, scene, o, progress, clock, r);
+      if (o.refine == Refinement::Auto && r.refine.splits > 0) o.fit.alpha = r.alpha;  // the bounced fit keeps it
+    }
     else fit(scene, o, progress, clock, r), o.fit.alpha = r.alpha;  // the --error rounds and the bounced fit keep it
   }
   if (r.point.size() == 0) r.point = r.transfer;

@@ -439,6 +439,31 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
     bool recorded = false;
     for (const auto& [k, v] : r.metadata) recorded |= k == "auto";
     EXPECT_TRUE(recorded);
+    // α is chosen as the default bake's is, ascending from 0, on samples held out of the input.
+    ASSERT_FALSE(r.alpha_trials.empty());
+    EXPECT_EQ(r.alpha_trials.front().first, o.alpha_choices.front());
+    // The last tried is kept, or the one before it (whose gain over it the hold-out could not tell).
+    EXPECT_TRUE(r.alpha == r.alpha_trials.back().first || (r.alpha_trials.size() > 1 && r.alpha == r.alpha_trials[r.alpha_trials.size() - 2].first));
+    // The second round of vertex rays: only the input's vertices, at most their own rays again.
+    const size_t first_new = r.mesh.num_vertices() - r.refine.new_vertices;
+    double before = 0, extra = 0;
+    for (size_t i = 0; i < r.mesh.num_vertices(); ++i) {
+      if (i >= first_new) EXPECT_EQ(r.vertex_rays[i], 64.0) << "new vertex " << i;
+      else before += 64, extra += r.vertex_rays[i] - 64;
+    }
+    EXPECT_GT(r.top_up.rays, 0u);
+    EXPECT_EQ(extra, double(r.top_up.rays));
+    EXPECT_LE(extra, before);
+    {
+      BakeOptions fixed = o;
+      fixed.alpha_auto = false, fixed.vertex_share = 0;
+      const BakeResult f = bake(mesh, fixed);
+      EXPECT_TRUE(f.alpha_trials.empty());
+      EXPECT_EQ(f.alpha, o.fit.alpha);
+      EXPECT_EQ(f.top_up.rays, 0u);
+      const double ef = evaluate_by_closest_point(ref, vertex_positions(f.mesh), f.mesh.triangles, f.transfer).rms_percent;
+      EXPECT_LT(ef, 0.5 * e_none);
+    }
     o.transfer.threads = 2;
     EXPECT_EQ((bake(mesh, o).transfer - r.transfer).cwiseAbs().maxCoeff(), 0.0) << "any thread count";
     o.transfer.threads = 1;
