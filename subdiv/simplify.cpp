@@ -22,7 +22,8 @@
 // Both are memoryless, as the paper combines them. The signal is SH in one global frame, so the
 // distance of the paper's equation 5 is the coefficient distance. Priority:
 //   E_signal / value_scale² + geometry_weight · E_geom / diagonal²   (Geometry: E_geom alone).
-// The same module refuses collapses that flip a face (its normal turns by 90° or more), make a
+// The same module refuses collapses that flip a face (its normal turns by 90° or more, or comes
+// to face against one of its corners' render normals when it did not before), make a
 // face below the minimum angle (unless the faces replaced were worse) or without area, put v1
 // off the plane of one of v0's faces by more than the surface tolerance, or move a boundary or
 // feature line by more than its tolerance (the distance of v0 from the line that replaces its
@@ -84,6 +85,7 @@ std::string short_number(double x) {
 // Everything the module reads: the input, and each OpenMesh face's corners as our mesh has them.
 struct State {
   RowMatrixXd* values = nullptr;  // a corner collapse's moved render vertices get new estimates
+  const RowMatrixX3d* normals = nullptr;  // per render vertex (none: the guard that reads them is off)
   SimplifyOptions options;
   double diagonal = 1, cos_min_angle = 1, surface_tolerance = 0;
   std::vector<std::array<uint32_t, 3>> corner_pos, corner_render;  // per OpenMesh face, our corner order
@@ -166,6 +168,13 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
   }
   void set_state(State* s) { s_ = s; }
 
+  // Whether a face of normal n (any length) faces against the normal of one of its corners.
+  bool faces_away(const Eigen::Vector3d& n, uint32_t a, uint32_t b, uint32_t c) const {
+    if (!s_->normals) return false;
+    const RowMatrixX3d& N = *s_->normals;
+    return !(n.dot(N.row(a).transpose()) > 0 && n.dot(N.row(b).transpose()) > 0 && n.dot(N.row(c).transpose()) > 0);
+  }
+
   float collapse_priority(const CollapseInfo& ci) override {
     worst_for_ = HalfedgeHandle();
     if (!sides(ci)) return refuse(s_->refused_side);
@@ -183,6 +192,10 @@ class ModTransfer : public OpenMesh::Decimater::ModBaseT<OMesh> {
       const Eigen::Vector3d pa = vec(m.point(VertexHandle(int(pos[ka])))), pb = vec(m.point(VertexHandle(int(pos[kb]))));
       const Eigen::Vector3d n0 = (pa - p0).cross(pb - p0), n1 = (pa - p1).cross(pb - p1);
       if (!(n0.dot(n1) > 0)) return refuse(s_->refused_flip);  // flipped, or no area left
+      // Nor may it face against one of its corners' normals (unless it did before): a small face
+      // can turn far within the surface tolerance, and a corner's moved render vertex or v1's
+      // render vertex of its side may bring a normal it never had (mori_knob: 24 such faces).
+      if (faces_away(n1, r1, ren[ka], ren[kb]) && !faces_away(n0, ren[k0], ren[ka], ren[kb])) return refuse(s_->refused_flip);
       // Below the minimum angle only where the faces it replaces were already worse (a needle of
       // the input may be collapsed into something better, never into something worse).
       if (const double c = max_cosine(p1, pa, pb); c > s_->cos_min_angle && c > worst_before(ci)) return refuse(s_->refused_angle);
@@ -470,6 +483,7 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
 
   State s;
   s.values = &values, s.options = options;
+  if (mesh.normals.rows() == Eigen::Index(mesh.num_vertices())) s.normals = &mesh.normals;
   s.diagonal = mesh.positions.rows() ? std::max(bounds(mesh.positions).diagonal(), 1e-300) : 1;
   s.cos_min_angle = std::cos(options.min_angle_deg * M_PI / 180);
   s.surface_tolerance = options.surface_tolerance * s.diagonal;
@@ -561,9 +575,14 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
         const size_t one = decimater.decimate_to_faces(0, om.n_faces() - 1);
         told.finish_call(one);
         stats.collapses += one;
-        if (live_faces(om) + kept.size() != options.budget)
-          stats.warning = "budget " + std::to_string(options.budget) + " cannot be met exactly: no boundary collapse is left "
-                          "(a closed surface has an even triangle count): " + std::to_string(live_faces(om) + kept.size());
+        if (live_faces(om) + kept.size() != options.budget) {
+          bool open = false;
+          for (OMesh::EdgeIter e = om.edges_begin(); e != om.edges_end() && !open; ++e) open = !om.status(*e).deleted() && om.is_boundary(*e);
+          stats.warning = "budget " + std::to_string(options.budget) + " cannot be met exactly: " +
+                          (open ? "the guards allow no boundary collapse (a collapse elsewhere removes two faces)"
+                                : "no boundary collapse is left (a closed surface has an even triangle count)") +
+                          ": " + std::to_string(live_faces(om) + kept.size());
+        }
       }
     }
   }
