@@ -272,7 +272,10 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   }
   if (res.simplified && res.simplify.collapses > 0 && (o.refine != Refinement::Auto || res.refine.splits == 0)) r.set("alpha", o.simplified_alpha);
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
-  else if (res.top_up.rays > 0) record(r, res.top_up);  // both ways: a second round without a pilot
+  else {  // both ways: a second round and a hold-out without a pilot
+    if (res.top_up.rays > 0) record(r, res.top_up);
+    if (res.fit_data.plan.holdout.size() > 0) record(r, res.predicted);
+  }
   const bool early = early_stop_on(o);
   record_ray_spread(r, res.vertex_rays, early ? o.round_rays : o.transfer.rays);
   r.set("early_stop", early);
@@ -432,8 +435,11 @@ void print_bake_summary(const Report& r) {
                        "{seconds_fit_unshadowed:3} s, no rays)"});
   }
   if (r.has("predicted_error_percent"))
-    r.print(stdout, {"  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
-                     "on {predicted_error_samples} held-out pilot samples: what prtsub eval should find"});
+    r.print(stdout, {r.has("pilot_samples")
+                         ? "  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
+                           "on {predicted_error_samples} held-out pilot samples: what prtsub eval should find"
+                         : "  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
+                           "on {predicted_error_samples} samples held out of the input's surface: what prtsub eval should find"});
   if (r.has("target_error_percent"))
     r.print(stdout, {"              target {target_error_percent}%: first round {target_first_round_rays} rays per vertex (a pilot of "
                      "{target_first_round_points} vertices predicts noise R^-{target_first_round_decay:2}, at 32-256: {target_first_round_noise})",

@@ -444,6 +444,11 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
     EXPECT_EQ(r.alpha_trials.front().first, o.alpha_choices.front());
     // The last tried is kept, or the one before it (whose gain over it the hold-out could not tell).
     EXPECT_TRUE(r.alpha == r.alpha_trials.back().first || (r.alpha_trials.size() > 1 && r.alpha == r.alpha_trials[r.alpha_trials.size() - 2].first));
+    // The same hold-out predicts the asset's error, as eval measures it.
+    EXPECT_GE(r.predicted.samples, 4096u);
+    // Within three of its standard errors, and a tenth of eval's figure for eval's own spread (4,000
+    // points; its reference's noise, which the hold-out subtracts and eval does not, adds to it).
+    EXPECT_NEAR(r.predicted.percent, e, 3 * r.predicted.standard_error + 0.1 * e) << "± " << r.predicted.standard_error;
     // The second round of vertex rays: only the input's vertices, at most their own rays again.
     const size_t first_new = r.mesh.num_vertices() - r.refine.new_vertices;
     double before = 0, extra = 0;
