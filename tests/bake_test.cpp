@@ -401,6 +401,19 @@ TEST(Bake, ABudgetBelowTheInputSimplifiesAndTheFitToTheSourceBeatsItsPointValues
   };
   const double e_fit = error(lsq, lsq.transfer), e_point = error(lsq, lsq.point);
   EXPECT_LT(e_fit, 0.9 * e_point) << e_fit << "% against " << e_point << "%";
+  // The bake predicts that error on samples held out of the input's surface: within three of
+  // their standard errors, and a tenth of eval's figure for eval's own spread (4,000 points).
+  EXPECT_GE(lsq.predicted.samples, 4096u);
+  {  // spread by area, each stands for the same area (not its face's over its count: fewer samples than faces)
+    const Holdout& h = lsq.fit_data.plan.holdout;
+    double sum = 0;
+    for (double w : h.weight) {
+      EXPECT_EQ(w, h.weight.front());
+      sum += w;
+    }
+    EXPECT_NEAR(sum, test::total_area(mesh), 1e-9 * test::total_area(mesh));
+  }
+  EXPECT_NEAR(lsq.predicted.percent, e_fit, 3 * lsq.predicted.standard_error + 0.1 * e_fit) << "± " << lsq.predicted.standard_error;
   o.simplify.metric = SimplifyMetric::Geometry;
   const BakeResult geometry = bake(mesh, o);
   const double e_geometry = error(geometry, geometry.transfer);
