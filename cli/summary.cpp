@@ -435,11 +435,11 @@ void print_bake_summary(const Report& r) {
                        "{seconds_fit_unshadowed:3} s, no rays)"});
   }
   if (r.has("predicted_error_percent"))
-    r.print(stdout, {r.has("pilot_samples")
-                         ? "  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
-                           "on {predicted_error_samples} held-out pilot samples: what prtsub eval should find"
-                         : "  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, measured "
-                           "on {predicted_error_samples} samples held out of the input's surface: what prtsub eval should find"});
+    std::printf("%s\n", r.format("  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, "
+                                 "measured on {predicted_error_samples} " +
+                                 std::string(r.has("pilot_samples") ? "held-out pilot samples" : "samples held out of the input's surface") +
+                                 ": what prtsub eval should find")
+                            .c_str());
   if (r.has("target_error_percent"))
     r.print(stdout, {"              target {target_error_percent}%: first round {target_first_round_rays} rays per vertex (a pilot of "
                      "{target_first_round_points} vertices predicts noise R^-{target_first_round_decay:2}, at 32-256: {target_first_round_noise})",

@@ -263,17 +263,14 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   if (o.fit.method != FitMethod::Point && !o.refine_only) {
     m.push_back({"samples", std::to_string(r.fit_data.samples.size())});
     m.push_back({"sample_allocation", sample_allocation_name(r.fit_data.allocation)});
-    if (r.fit_data.allocation != SampleAllocation::Pilot && r.fit_data.plan.holdout.size() > 0) {
+    const bool pilot = r.fit_data.allocation == SampleAllocation::Pilot;
+    if (pilot || r.fit_data.plan.holdout.size() > 0) {  // a simplified asset's hold-out lies on the input's surface
       char buf[128];
-      std::snprintf(buf, sizeof buf, "%.3f%% +- %.3f%% (eval's unit, on %zu samples held out of the input's surface)", r.predicted.percent,
-                    r.predicted.standard_error, r.predicted.samples);
+      std::snprintf(buf, sizeof buf, "%.3f%% +- %.3f%% (eval's unit, on %zu %s)", r.predicted.percent, r.predicted.standard_error,
+                    r.predicted.samples, pilot ? "held-out pilot samples" : "samples held out of the input's surface");
       m.push_back({"predicted_error", buf});
     }
-    if (r.fit_data.allocation == SampleAllocation::Pilot) {
-      char buf[96];
-      std::snprintf(buf, sizeof buf, "%.3f%% +- %.3f%% (eval's unit, on %zu held-out pilot samples)", r.predicted.percent,
-                    r.predicted.standard_error, r.predicted.samples);
-      m.push_back({"predicted_error", buf});
+    if (pilot) {
       if (o.target_error > 0)
         m.push_back({"target_error", std::to_string(o.target_error) + "% (" + std::to_string(r.target_rays) + " more vertex rays in " +
                                          std::to_string(r.target_rounds) + " rounds, " + std::to_string(r.target_samples) +
@@ -514,6 +511,26 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
   if (r.mesh.num_faces() < T) refine_adaptively(scene, o, r, r.simplified && r.simplify.collapses > 0 ? &source : nullptr);
 }
 
+double surface_area(const Mesh& m) {
+  double a = 0;
+  for (const Triangle& t : m.triangles) {
+    const double ta = triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
+    if (std::isfinite(ta)) a += ta;
+  }
+  return a;
+}
+
+// A second round of vertex rays: `budget` more where the planning variance costs most (each
+// vertex to at most 16 times --rays), each vertex's rays continuing its own lattice.
+void second_round(const RayScene& scene, const BakeOptions& o, const std::vector<double>& planning, double budget,
+                  const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
+  const TopUpPlan plan = plan_top_up(planning, r.vertex_rays, static_cast<uint64_t>(budget), vertex_areas(r.mesh), 16.0 * o.transfer.rays);
+  if (progress.stage) progress.stage("vertex rays", plan.vertices);
+  r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.transfer, r.point_variance, r.vertex_rays, progress.add, &r.point_halves);
+  r.rays += r.top_up.rays;
+  r.seconds_top_up = clock.lap();
+}
+
 // Samples held out of the source surface, on which a simplified asset's error is predicted (as
 // eval would measure it) and both ways chooses the fit's α as the default bake does
 // (fit_bake_values): four per face of the asset (at least 4096, at most the pilot's
@@ -545,12 +562,7 @@ Holdout source_holdout(const Mesh& source, const RayScene& scene, const Mesh& me
   // count) would count a large face's sample twice over: once in landing there (by area), again
   // in its weight. The samples are spread by area, so each stands for the same area (teapot at
   // 10%, 0.4 samples per source face: 4.09% predicted against eval's 6.49% with face weights).
-  double area = 0;
-  for (const Triangle& t : source.triangles) {
-    const double a = triangle_area(source.point(t[0]), source.point(t[1]), source.point(t[2]));
-    if (std::isfinite(a)) area += a;
-  }
-  h.weight.assign(at.size(), at.empty() ? 0.0 : area / double(at.size()));
+  h.weight.assign(at.size(), at.empty() ? 0.0 : surface_area(source) / double(at.size()));
   h.variance = std::move(variance);
   h.values = values.cast<float>();
   return h;
@@ -612,29 +624,25 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   r.fit_data.rays = stats.rays;
   r.rays += stats.rays;
   r.seconds_samples = clock.lap();
-  r.point = r.transfer;
-  FitOptions fo = o.fit;
-  // Both ways, the mesh keeps about the input's density: the ordinary fit's weight, weighed by
-  // noise as it is (sibenik: 2.771% against 2.793% without noise weighing; docs/simplification.md).
   const bool both_ways = o.refine == Refinement::Auto && r.refine.splits > 0;  // (when it only simplified, as a simplification)
-  fo.alpha = both_ways ? o.fit.alpha : o.simplified_alpha;
-  // The samples lie on the input, whose normals are not the asset's: t_u is not known there.
-  fo.unshadowed_order = 0;
   if (both_ways && o.vertex_share > 0 && o.fit.method == FitMethod::LeastSquares) {
     // A second round of vertex rays, as the default bake's (fit): at most the vertices' own rays
     // again, where their noise costs most. Refinement's new vertices were traced at their closest
     // points on the input, not where they stand, so only the input's own vertices take part.
     const size_t first_new = r.mesh.num_vertices() - std::min(r.mesh.num_vertices(), r.refine.new_vertices);
     std::vector<double> planning = smoothed_variance(r.mesh, r.point_variance, r.vertex_rays);
+    std::fill(planning.begin() + std::ptrdiff_t(first_new), planning.end(), 0.0);
     double traced = 0;
     for (size_t i = 0; i < first_new; ++i) traced += r.vertex_rays[i];
-    std::fill(planning.begin() + std::ptrdiff_t(first_new), planning.end(), 0.0);
-    const TopUpPlan plan = plan_top_up(planning, r.vertex_rays, static_cast<uint64_t>(traced), vertex_areas(r.mesh), 16.0 * o.transfer.rays);
-    if (progress.stage) progress.stage("vertex rays", plan.vertices);
-    r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.point, r.point_variance, r.vertex_rays, progress.add);
-    r.rays += r.top_up.rays;
-    r.seconds_top_up = clock.lap();
+    second_round(scene, o, planning, traced, progress, clock, r);
   }
+  r.point = r.transfer;
+  FitOptions fo = o.fit;
+  // Both ways, the mesh keeps about the input's density: the ordinary fit's weight, weighed by
+  // noise as it is (sibenik: 2.771% against 2.793% without noise weighing; docs/simplification.md).
+  fo.alpha = both_ways ? o.fit.alpha : o.simplified_alpha;
+  // The samples lie on the input, whose normals are not the asset's: t_u is not known there.
+  fo.unshadowed_order = 0;
   // The hold-out: both ways chooses α on it; every least-squares fit here predicts its error on it.
   const bool held_out = fo.method == FitMethod::LeastSquares && r.fit_data.samples.size() > 0;
   if (held_out) {
@@ -653,15 +661,6 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   }
   r.seconds_fit = clock.lap();
   if (!r.fit.warning.empty()) r.warnings.push_back(r.fit.warning);
-}
-
-double surface_area(const Mesh& m) {
-  double a = 0;
-  for (const Triangle& t : m.triangles) {
-    const double ta = triangle_area(m.point(t[0]), m.point(t[1]), m.point(t[2]));
-    if (std::isfinite(ta)) a += ta;
-  }
-  return a;
 }
 
 void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock, BakeResult& r) {
@@ -686,14 +685,7 @@ void fit(const RayScene& scene, const BakeOptions& o, const BakeProgress& progre
     // default 256 the saved share is always below it (0.86 of it at most, on the shared scenes).
     double traced = 0;
     for (double v : r.vertex_rays) traced += v;
-    const double budget = std::min(o.vertex_share * saved, traced);
-    const TopUpPlan plan =
-        plan_top_up(smoothed_variance(r.mesh, r.point_variance, r.vertex_rays), r.vertex_rays, static_cast<uint64_t>(budget), vertex_areas(r.mesh),
-                    16.0 * o.transfer.rays);
-    if (progress.stage) progress.stage("vertex rays", plan.vertices);
-    r.top_up = apply_top_up(r.mesh, scene, first_round(o), plan, r.transfer, r.point_variance, r.vertex_rays, progress.add, &r.point_halves);
-    r.rays += r.top_up.rays;
-    r.seconds_top_up = clock.lap();
+    second_round(scene, o, smoothed_variance(r.mesh, r.point_variance, r.vertex_rays), std::min(o.vertex_share * saved, traced), progress, clock, r);
   }
   if (o.transfer.log) o.transfer.log->barrier(true);  // a sharded bake: the rest is the merge's
   r.point = r.transfer;
