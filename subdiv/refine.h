@@ -57,7 +57,8 @@ class RefinementSignal {
 struct RefineOptions {
   size_t budget = 0;       //!< output triangle count
   //! faces popped before the signal is asked for new values; at most 1/16 of the faces there
-  //! are, so that small meshes are not refined on stale keys
+  //! are and 1/64 of the triangles the refinement adds, so that small meshes and short
+  //! refinements are not refined on stale keys
   size_t batch = 256;
   double max_edge = 0;     //!< > 0: first split every edge longer than this (within the budget)
 };

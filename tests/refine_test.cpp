@@ -76,6 +76,23 @@ TEST(Refine, ABatchIsAtMostASixteenthOfTheFaces) {
   EXPECT_GT(st.batches, 10u) << st.faces_popped << " faces popped";
 }
 
+TEST(Refine, ABatchIsAtMostASixtyFourthOfWhatTheRunAdds) {
+  // 2,048 faces and 128 more to add: the sixteenth of the faces would be one batch of 128 pops,
+  // split on the starting keys, which spread it over every face the step crosses and their
+  // neighbours. A sixty-fourth of the 128 (two pops a batch) lets the splits go deep at the step.
+  Mesh m = test::build(test::grid(32));
+  StepSignal s;
+  s.width = 0.002;
+  RowMatrixXd v = s.initial(m);
+  RefineStats st = refine_adaptive(m, v, s, RefineOptions{2048 + 128, 256, 0});
+  EXPECT_EQ(m.num_faces(), 2048u + 128u);
+  size_t near = 0;
+  for (const NewVertex& nv : s.created) near += std::abs(nv.position.x() - s.x0) < 0.5 / 32;
+  // Every new vertex within half a starting cell of the step; with one batch of 128, 32 of 64.
+  EXPECT_EQ(near, s.created.size());
+  EXPECT_GE(st.batches, 32u);
+}
+
 TEST(Refine, BudgetParityAndTrivialBudgets) {
   StepSignal s;
   {  // below the input: unchanged, with a warning
