@@ -274,7 +274,11 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
   if (res.fit_data.allocation == SampleAllocation::Pilot) record(r, res.top_up), record(r, res.predicted);
   else {  // both ways: a second round and a hold-out without a pilot
     if (res.top_up.rays > 0) record(r, res.top_up);
-    if (res.fit_data.plan.holdout.size() > 0) record(r, res.predicted);
+    if (res.fit_data.plan.holdout.size() > 0) {
+      record(r, res.predicted);
+      r.set("predicted_error_rays", res.fit_data.plan.holdout.rays);  // per sample, after any tracing again
+      r.set("holdout_sharpen_rays", res.holdout_sharpen_rays);
+    }
   }
   const bool early = early_stop_on(o);
   record_ray_spread(r, res.vertex_rays, early ? o.round_rays : o.transfer.rays);
@@ -437,7 +441,8 @@ void print_bake_summary(const Report& r) {
   if (r.has("predicted_error_percent"))
     std::printf("%s\n", r.format("  error:      {predicted_error_percent:3}% (± {predicted_error_standard_error:3}%) of ||t_unshadowed||, "
                                  "measured on {predicted_error_samples} " +
-                                 std::string(r.has("pilot_samples") ? "held-out pilot samples" : "samples held out of the input's surface") +
+                                 std::string(r.has("pilot_samples") ? "held-out pilot samples"
+                                                                    : "samples held out of the input's surface ({predicted_error_rays} rays each)") +
                                  ": what prtsub eval should find")
                             .c_str());
   if (r.has("target_error_percent"))

@@ -205,6 +205,9 @@ struct BakeResult {
   //! --error: rays spent measuring: the held-out samples traced again for a sharper estimate, and
   //! with bounces the held-out samples' paths and the passes' noise
   uint64_t target_holdout_rays = 0;
+  //! a simplified or both-ways asset: rays that traced its hold-out (on the source) again, where
+  //! the prediction's standard error was above a quarter of it
+  uint64_t holdout_sharpen_rays = 0;
   FitStats fit;
   double alpha = 0;  //!< the fit's regulariser weight as used (chosen, with alpha_auto)
   //! alpha_auto: each candidate α and the held-out error of its fit, in percent (empty otherwise)

@@ -120,14 +120,21 @@ Holdout holdout_subset(const Holdout& h, size_t count) {
 
 Holdout sharpen_holdout(const Mesh& mesh, const RayScene& scene, const Holdout& h, const TransferOptions& o, TransferStats* stats,
                         const ProgressFn& progress) {
+  if (h.barycentric.rows() != static_cast<Eigen::Index>(h.size())) throw InputError("sharpen hold-out: the samples' arrays differ in length");
+  RowMatrixX3d points, normals, offsets;
+  holdout_points(mesh, h, "sharpen hold-out", points, normals, offsets);
+  return sharpen_holdout_at(points, normals, offsets, scene, h, o, stats, progress);
+}
+
+Holdout sharpen_holdout_at(const RowMatrixX3d& points, const RowMatrixX3d& normals, const RowMatrixX3d& offsets, const RayScene& scene,
+                           const Holdout& h, const TransferOptions& o, TransferStats* stats, const ProgressFn& progress) {
   const auto n = static_cast<Eigen::Index>(h.size());
-  if (h.barycentric.rows() != n || h.values.rows() != n || h.variance.size() != h.size() || h.weight.size() != h.size())
+  if (h.values.rows() != n || h.variance.size() != h.size() || h.weight.size() != h.size() || points.rows() != n ||
+      normals.rows() != n || offsets.rows() != n)
     throw InputError("sharpen hold-out: the samples' arrays differ in length");
   if (h.rays <= 0) throw InputError("sharpen hold-out: the samples' values are not shadowed transfer traced with a known ray count");
   if (o.rays < 1) throw InputError("sharpen hold-out: at least one more ray per sample");
   if (h.values.cols() != o.order * o.order) throw InputError("sharpen hold-out: the values' order does not match the rays'");
-  RowMatrixX3d points, normals, offsets;
-  holdout_points(mesh, h, "sharpen hold-out", points, normals, offsets);
   std::vector<double> variance;
   const RowMatrixXd more = shadowed_transfer(scene, points, normals, o, stats, progress, &offsets, &variance);
   // Two independent unbiased estimates, weighted by their rays: still unbiased, and still

@@ -36,6 +36,14 @@ Holdout holdout_subset(const Holdout& holdout, size_t count);
 Holdout sharpen_holdout(const Mesh& mesh, const RayScene& scene, const Holdout& holdout, const TransferOptions& options,
                         TransferStats* stats = nullptr, const ProgressFn& progress = {});
 
+//! The same at points the caller keeps, for a hold-out drawn on another surface than the
+//! asset's (a simplified asset's, drawn on its source): `points`, `normals` and `offsets` are
+//! each sample's, as it was first traced (one row per sample).
+//! \throw InputError as sharpen_holdout; EmbreeError
+Holdout sharpen_holdout_at(const RowMatrixX3d& points, const RowMatrixX3d& normals, const RowMatrixX3d& offsets, const RayScene& scene,
+                           const Holdout& holdout, const TransferOptions& options, TransferStats* stats = nullptr,
+                           const ProgressFn& progress = {});
+
 //! The hold-out for a bounced asset: each sample's reference gains the light of `options.bounces`
 //! bounces, path-traced through the surface from the sample's point (path_traced_transfer: eval's
 //! own reference, which never reads the asset's values), and its paths' variance joins the

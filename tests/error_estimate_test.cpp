@@ -224,6 +224,24 @@ TEST(SharpenHoldout, TracesEachSampleAgainWhereThePilotDidAndMergesTheTwoByRays)
   EXPECT_GT(changed, 1e-3);  // under the shadow edge the two estimates differ
 }
 
+TEST(SharpenHoldout, AtPointsTheCallerKeepsItTracesThemAsAtTheMeshsOwn) {
+  // A simplified asset's hold-out lies on its source, not on the asset: the caller keeps the
+  // points. Given the pilot's own, the result is the one sharpen_holdout finds on the mesh.
+  const Shadowed s;
+  TransferOptions more;
+  more.rays = 24, more.order = 2, more.seed = 99;
+  TransferStats on_mesh, at_points;
+  const Holdout a = sharpen_holdout(s.mesh, s.scene, s.h, more, &on_mesh);
+  const Holdout b = sharpen_holdout_at(s.pilot.points, s.pilot.normals, s.pilot.offsets, s.scene, s.h, more, &at_points);
+  EXPECT_EQ(b.rays, 32);
+  EXPECT_EQ(at_points.rays, on_mesh.rays);
+  EXPECT_EQ(b.values, a.values);
+  EXPECT_EQ(b.variance, a.variance);
+  EXPECT_EQ(b.face, a.face);
+  const RowMatrixX3d fewer = s.pilot.points.topRows(s.pilot.points.rows() - 1);
+  EXPECT_THROW(sharpen_holdout_at(fewer, s.pilot.normals, s.pilot.offsets, s.scene, s.h, more), InputError);
+}
+
 TEST(SharpenHoldout, TheErrorsStandardErrorFallsAndItsMeanStaysWithinItsNoise) {
   const Shadowed s;
   const ErrorEstimate before = holdout_error(s.mesh, s.h, s.values);
