@@ -341,7 +341,8 @@ void write_page(const CompareCli& c, const BakeOptions& base, size_t source_face
             "ranked by the transfer and by the geometry alone, fitted to samples of the source surface (alpha "
          << fmt(base.simplified_alpha, 3) << "); their points are located by closest point (docs/simplification.md). "
             "Rows 'auto': the same counts both ways (--refine auto: simplified to " << fmt(base.auto_share, 2)
-         << " of the count where the transfer is smooth, then split where it varies), located the same way.";
+         << " of the count where the transfer is smooth, then split where it varies, then " << base.auto_cycles
+         << " further cycle(s) of collapsing a tenth and splitting back), located the same way.";
   html << "</p>";
   if (!rows.empty()) {
     html << "<h2>Error against triangles</h2>" << svg_loglog(series_of(rows, false), "triangles", "RMS error (%)");

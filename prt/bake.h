@@ -83,6 +83,10 @@ struct BakeOptions {
   //! refinement spends the rest where the transfer varies; 0.8 measured best on sibenik of
   //! 0.5-0.95 (BENCHMARKS.md, "Both ways")
   double auto_share = 0.8;
+  //! Auto: further cycles after the first, each collapsing a tenth of the budget where the refined
+  //! mesh is smoothest (the ranking now sees refinement's traced vertices) and refining back to
+  //! the budget on fresh keys; one cut the error by 0-6% on eight scenes (BENCHMARKS.md)
+  int auto_cycles = 1;
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples
@@ -173,6 +177,11 @@ struct BakeResult {
   RowMatrixXd transfer;  //!< #V by N²: the asset's values (order-1 transfer for AO); #V by 3·N² when a coloured albedo bounced
   RowMatrixXd point;     //!< #V by N²: the point-sampled values (equal to transfer when fit is point)
   RowMatrixX3d albedo;   //!< #V by 3: the albedo at each vertex when it is coloured, else no rows
+  //! Auto: per vertex, 1 where refinement made it (traced at its closest point on the input,
+  //! not where it stands: the second round of vertex rays leaves it out)
+  std::vector<char> refined_vertex;
+  int auto_cycles = 0;                //!< Auto: further cycles run (BakeOptions::auto_cycles)
+  size_t auto_cycle_collapses = 0;    //!< ... and the collapses they made (in simplify.collapses too)
   size_t rekeyed_at = 0;  //!< faces when refinement turned to keys on bounced light (0: it did not)
   std::vector<double> point_variance;  //!< #V: each point value's estimated variance (summed over N²)
   //! #V by N²: each point value's two independent halves' difference t_A − t_B, carried through

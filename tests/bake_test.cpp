@@ -488,12 +488,23 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
     const Holdout& held = r.fit_data.plan.holdout;
     EXPECT_EQ(r.holdout_sharpen_rays, uint64_t(held.rays - o.pilot.rays) * held.size());
     // The second round of vertex rays: only the input's vertices, at most their own rays again.
-    const size_t first_new = r.mesh.num_vertices() - r.refine.new_vertices;
+    // Refinement's vertices, of both cycles (the second's collapses can take either kind), are
+    // flagged; as many as the two passes made, less the second's collapses of them.
+    ASSERT_EQ(r.refined_vertex.size(), r.mesh.num_vertices());
+    EXPECT_EQ(r.auto_cycles, 1);
+    EXPECT_GT(r.auto_cycle_collapses, 0u);
+    size_t refined = 0;
     double before = 0, extra = 0;
     for (size_t i = 0; i < r.mesh.num_vertices(); ++i) {
-      if (i >= first_new) EXPECT_EQ(r.vertex_rays[i], 64.0) << "new vertex " << i;
-      else before += 64, extra += r.vertex_rays[i] - 64;
+      if (r.refined_vertex[i]) {
+        EXPECT_EQ(r.vertex_rays[i], 64.0) << "new vertex " << i;
+        ++refined;
+      } else {
+        before += 64, extra += r.vertex_rays[i] - 64;
+      }
     }
+    EXPECT_GT(refined, 0u);
+    EXPECT_LE(refined, r.refine.new_vertices);
     EXPECT_GT(r.top_up.rays, 0u);
     EXPECT_EQ(extra, double(r.top_up.rays));
     EXPECT_LE(extra, before);
@@ -506,6 +517,19 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
       EXPECT_EQ(f.top_up.rays, 0u);
       const double ef = evaluate_by_closest_point(ref, vertex_positions(f.mesh), f.mesh.triangles, f.transfer).rms_percent;
       EXPECT_LT(ef, 0.5 * e_none);
+    }
+    for (int cycles : {0, 2}) {
+      BakeOptions c = o;
+      c.auto_cycles = cycles;
+      const BakeResult b = bake(mesh, c);
+      const double ec = evaluate_by_closest_point(ref, vertex_positions(b.mesh), b.mesh.triangles, b.transfer).rms_percent;
+      EXPECT_EQ(b.auto_cycles, cycles);
+      EXPECT_EQ(b.mesh.num_faces(), T);
+      EXPECT_LT(ec, 0.5 * e_none) << cycles << " further cycles";
+      size_t flagged = 0;
+      for (char f : b.refined_vertex) flagged += f != 0;
+      if (cycles == 0) EXPECT_EQ(flagged, b.refine.new_vertices);  // nothing collapsed after refining
+      else EXPECT_GT(b.auto_cycle_collapses, r.auto_cycle_collapses);
     }
     o.transfer.threads = 2;
     EXPECT_EQ((bake(mesh, o).transfer - r.transfer).cwiseAbs().maxCoeff(), 0.0) << "any thread count";
