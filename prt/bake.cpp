@@ -459,7 +459,7 @@ void refine_rekeyed(const RayScene& scene, const BakeOptions& o, const BakeProgr
 // moved onto a neighbour's position (an input vertex, so on the source surface) are traced again
 // there, with their own normals.
 void simplify_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult& r, const ProgressFn& progress,
-                         std::vector<uint32_t>* removed_to = nullptr) {
+                         std::vector<uint32_t>* removed_to = nullptr, const Mesh* project_onto = nullptr) {
   SimplifyOptions so = o.simplify;
   so.budget = o.adaptive.budget;
   so.value_scale = unshadowed_norm(o.transfer.order);
@@ -480,6 +480,10 @@ void simplify_adaptively(const RayScene& scene, const BakeOptions& o, BakeResult
       normals.row(Eigen::Index(i)) = r.mesh.normals.row(moved[i]);
       off.row(Eigen::Index(i)) = offsets.row(moved[i]);
     }
+    // After refinement (both ways' further cycles) a neighbour may be one of its vertices, which
+    // lie near the input's surface, not on it: traced at the closest point on the input instead,
+    // as refinement traced that neighbour, not inside the input's geometry.
+    if (project_onto) project_onto_surface(*project_onto, vertex_offset_directions(*project_onto), points, normals, &off, o.transfer.threads);
     TransferStats st;
     std::vector<double> v;
     const TransferOptions t = first_round(o);
@@ -537,15 +541,17 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
     down.simplify.max_surface_tolerance = down.simplify.surface_tolerance;
     const SimplifyStats first = r.simplify;  // the summary's: the first pass, with every pass's collapses
     std::vector<uint32_t> to;
-    simplify_adaptively(scene, down, r, progress.add, &to);
+    simplify_adaptively(scene, down, r, progress.add, &to, &source);
     if (!r.simplify.warning.empty()) r.warnings.pop_back();  // a target, as the share is
     const size_t collapses = r.simplify.collapses;
+    const std::vector<uint32_t> moved = std::move(r.simplify.moved);
     r.simplify = first;
     r.simplify.collapses += collapses;
     r.auto_cycles += 1, r.auto_cycle_collapses += collapses;
     std::vector<char> refined(r.mesh.num_vertices(), 0);
     for (size_t i = 0; i < to.size() && i < r.refined_vertex.size(); ++i)
       if (to[i] != UINT32_MAX) refined[to[i]] = r.refined_vertex[i];
+    for (uint32_t m : moved) refined[m] = 1;  // traced at a closest input point, as refinement's are
     const RefineStats so_far = r.refine;
     refine_adaptively(scene, o, r, &source);
     const RefineStats pass = r.refine;

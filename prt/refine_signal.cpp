@@ -93,9 +93,9 @@ TransferSignal::TransferSignal(const RayScene& scene, const TransferSignalOption
   if (options.project_onto) source_offsets_ = vertex_offset_directions(*options.project_onto);
 }
 
-void TransferSignal::project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d* offsets) {
-  const Mesh& m = *options_.project_onto;
-  const std::vector<SurfaceLocation> at = closest_points(m, points, options_.transfer.threads, &normals);
+void project_onto_surface(const Mesh& m, const RowMatrixX3d& surface_offsets, RowMatrixX3d& points, RowMatrixX3d& normals,
+                          RowMatrixX3d* offsets, int threads) {
+  const std::vector<SurfaceLocation> at = closest_points(m, points, threads, &normals);
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     const SurfaceLocation& l = at[size_t(i)];
     const Triangle& t = m.triangles[l.face];
@@ -103,7 +103,7 @@ void TransferSignal::project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMat
     for (int c = 0; c < 3; ++c) {
       p += l.barycentric[c] * m.point(t[c]);
       n += l.barycentric[c] * m.normals.row(t[c]).transpose();
-      d += l.barycentric[c] * source_offsets_.row(t[c]).transpose();
+      d += l.barycentric[c] * surface_offsets.row(t[c]).transpose();
     }
     // The source's normal where it faces the vertex's way; on the other side of a thin wall, not
     // moved at all; across a crease (the closest face is the other side's), moved with its own.
@@ -114,6 +114,10 @@ void TransferSignal::project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMat
     normals.row(i) = n.normalized().transpose();
     if (offsets) offsets->row(i) = (d.norm() > 1e-12 ? Eigen::Vector3d(d.normalized()) : n.normalized()).transpose();
   }
+}
+
+void TransferSignal::project(RowMatrixX3d& points, RowMatrixX3d& normals, RowMatrixX3d* offsets) {
+  project_onto_surface(*options_.project_onto, source_offsets_, points, normals, offsets, options_.transfer.threads);
 }
 
 double TransferSignal::edge_error(const EdgeView& e) const {

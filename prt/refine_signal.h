@@ -51,6 +51,15 @@ double edge_estimate(EdgeEstimate estimate, const EdgeView& edge, double curvatu
 //! \param probed the transfer traced at the face's centroid (f.K values)
 double probe_estimate(EdgeEstimate estimate, const FaceProbe& face, const double* probed);
 
+//! Moves points (and their normals and offsets) to their closest points on `surface` among the
+//! faces facing their way (closest_points), as a projecting TransferSignal traces its vertices:
+//! with the surface's interpolated normal and offset
+//! where that normal is within 60° of the point's own, keeping its own normal (across a crease)
+//! otherwise, and not moving it where the surface faces the other way (a thin wall's far side).
+//! \param surface_offsets the surface's vertex offset directions (vertex_offset_directions)
+void project_onto_surface(const Mesh& surface, const RowMatrixX3d& surface_offsets, RowMatrixX3d& points, RowMatrixX3d& normals,
+                          RowMatrixX3d* offsets, int threads);
+
 //! Refinement's signal: transfer computed with the scene of the (unchanged) geometry.
 class TransferSignal : public RefinementSignal {
  public:

@@ -98,6 +98,30 @@ TEST(Eval, ASignalProjectingOntoTheSourceTracesNewVerticesOnItsSurface) {
   EXPECT_LT(inside.row(0).norm(), 0.1 * open.norm()) << "unprojected, the sphere blocks it";
 }
 
+TEST(Eval, ProjectingOntoASurfaceMovesPointsWithItsNormalWhereTheyAgree) {
+  // A unit sphere: a point at radius 0.8 facing out moves to radius 1 with the sphere's normal
+  // and offset there; one whose normal is 70° off the sphere's moves but keeps its own normal
+  // and offset (across a crease).
+  const Mesh sphere = test::build(test::icosphere(4));
+  const RowMatrixX3d offsets = vertex_offset_directions(sphere);
+  const Eigen::Vector3d d = Eigen::Vector3d(1, 2, 3).normalized();
+  const Eigen::Vector3d side = d.cross(Eigen::Vector3d::UnitX()).normalized();
+  const Eigen::Vector3d tilted = std::cos(70 * M_PI / 180) * d + std::sin(70 * M_PI / 180) * side;
+  RowMatrixX3d points(2, 3), normals(2, 3);
+  points.row(0) = points.row(1) = 0.8 * d.transpose();
+  normals.row(0) = d.transpose(), normals.row(1) = tilted.transpose();
+  RowMatrixX3d off = normals;
+  const RowMatrixX3d normals_before = normals;
+  project_onto_surface(sphere, offsets, points, normals, &off, 1);
+  EXPECT_NEAR(points.row(0).norm(), 1.0, 2e-3);  // on the faceted sphere, within its chord sag
+  EXPECT_GT(points.row(0).normalized().dot(d.transpose()), 0.999);
+  EXPECT_GT(normals.row(0).dot(d.transpose()), 0.999);
+  EXPECT_GT(off.row(0).dot(d.transpose()), 0.99);
+  EXPECT_NEAR(points.row(1).norm(), 1.0, 2e-3);
+  EXPECT_EQ(normals.row(1), normals_before.row(1));
+  EXPECT_EQ(off.row(1), normals_before.row(1));
+}
+
 TEST(Eval, FlatUnoccludedSurfaceHasZeroErrorAndReferencePointsAreFixed) {
   test::TempDir dir;
   test::write_obj(dir.path("plane.obj"), test::quad(1.0, 0.0, true));
