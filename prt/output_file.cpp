@@ -177,6 +177,7 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
       fd = -1;
     }
   }
+  const bool unnamed = fd >= 0;
   if (fd < 0) {
     slot = claim_slot(tmp);
     fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -187,20 +188,21 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
     }
     if (!write_and_sync(fd, bytes, what, reason)) fail(slot, what);
   }
-  if (::close(fd) != 0) fail(slot, "write failed on close");
-  if (::rename(tmp.c_str(), path.c_str()) != 0) fail(slot, "cannot move output into place");
+  if (!unnamed && ::close(fd) != 0) fail(slot, "write failed on close");
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (unnamed) ::close(fd);
+    fail(slot, "cannot move output into place");
+  }
+  // An unnamed file was synced before it had a name, so its close can lose nothing; it comes
+  // after the rename so that the temporary name lives for two system calls only.
+  if (unnamed) ::close(fd);
   release_slot(slot);
 }
 
-void check_output_path(const std::string& path) {
-  const int kind = target_kind(path);
-  if (kind == 2) {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
-    if (fd < 0) throw IoError(path + ": cannot open output device (" + errno_text() + ")");
-    ::close(fd);
-    return;
-  }
-  // A new file must be creatable beside the target, where the temporary one will go.
+namespace {
+
+// A named file beside `path` is created and removed, or IoError says why it cannot be.
+void probe_named(const std::string& path) {
   const std::string probe = temporary_name(path);
   const int slot = claim_slot(probe);  // a signal between the open and the unlink removes it too
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -213,6 +215,25 @@ void check_output_path(const std::string& path) {
   ::close(fd);
   ::unlink(probe.c_str());
   release_slot(slot);
+}
+
+}  // namespace
+
+void check_output_path(const std::string& path) {
+  const int kind = target_kind(path);
+  if (kind == 2) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) throw IoError(path + ": cannot open output device (" + errno_text() + ")");
+    ::close(fd);
+    return;
+  }
+  // A new file must be creatable beside the target, where the temporary one will go. An unnamed
+  // one shows it and, unlike a named probe, leaves nothing if the process is killed meanwhile.
+  const int unnamed = open_unnamed(path);
+  if (unnamed >= 0)
+    ::close(unnamed);
+  else
+    probe_named(path);
   if (kind == 1 && ::access(path.c_str(), F_OK) != 0)
     throw IoError(path + ": output file vanished");
 }
