@@ -1283,15 +1283,16 @@ BakeResult bake(const Mesh& mesh, const BakeOptions& options, const BakeProgress
   }
   if (o.fit.method != FitMethod::Point) {
     if (r.simplified && r.simplify.collapses > 0) {
+      // Its hold-out lies on the input's surface; fit_to_source predicts the error on it.
       fit_to_source(mesh, scene, o, progress, clock, r);
       if (o.refine == Refinement::Auto && r.refine.splits > 0) o.fit.alpha = r.alpha;  // the bounced fit keeps it
+    } else {
+      fit(scene, o, progress, clock, r), o.fit.alpha = r.alpha;  // the --error rounds and the bounced fit keep it
+      if (r.fit_data.allocation == SampleAllocation::Pilot || r.fit_data.plan.holdout.size() > 0)
+        r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
     }
-    else fit(scene, o, progress, clock, r), o.fit.alpha = r.alpha;  // the --error rounds and the bounced fit keep it
   }
   if (r.point.size() == 0) r.point = r.transfer;
-  // A simplified or both-ways asset has a hold-out on the input's surface (fit_to_source): it predicts its error too.
-  if (r.fit_data.allocation == SampleAllocation::Pilot || r.fit_data.plan.holdout.size() > 0)
-    r.predicted = holdout_error(r.mesh, r.fit_data.plan.holdout, asset_values(o, r.transfer));
   if (o.target_error > 0) reach_target(scene, o, progress, clock, r);
   if (o.bounce.bounces > 0) {
     BounceOptions b = o.bounce;
