@@ -121,7 +121,8 @@ void BakeCli::add_fit(ArgParser& args) {
   args.choice("--non-negative", "lsq: keep the fit from negative radiance under constant lights (the DC coefficient), also\n"
               "under narrow ones (the transfer function at 128 directions; costs accuracy), or not at all", &f.non_negative,
               {NonNegative::Off, NonNegative::Constant, NonNegative::Directions}, non_negative_name);
-  args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle", &s.per_triangle, 0.0, 1e6);
+  args.option("--samples-per-triangle", "N", "fit: average surface samples per triangle (--refine auto: twice this, spread\n"
+              "over the input's surface by area)", &s.per_triangle, 0.0, 1e6);
   args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &s.density, 0.0, 1e30);
   args.option("--min-samples", "M", "fit: samples every triangle gets at least", &s.min_per_triangle, size_t(0), size_t(1) << 20);
   args.option("--sample-rays", "R", "fit: rays per surface sample [default: the pilot chooses 4, 16 or 32 for the same sample\n"

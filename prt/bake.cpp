@@ -675,6 +675,14 @@ Holdout source_holdout(const Mesh& source, const RayScene& scene, const Mesh& me
   return h;
 }
 
+// Both ways samples the input's surface at this many times the samples per triangle asked. The
+// default bake's pilot sends its samples to the faces where interpolation fails; these are spread
+// over every face by area, so each face where they matter gets fewer. At about the same rays,
+// twice the samples beat more vertex rays on every scene measured, on sibenik by 11%
+// (BENCHMARKS.md, "Both ways: twice the samples"). A simplified asset gains little from them
+// (chinese_dragon at 10%: 1%).
+constexpr double kBothWaysSampleFactor = 2;
+
 // The fit of a simplified mesh: samples on the *source* surface (traced there, so they see the
 // shading the asset must reproduce, never a point inside the original geometry), each located
 // on the simplified surface by its closest point and weighted by that face's area over its
@@ -686,10 +694,12 @@ Holdout source_holdout(const Mesh& source, const RayScene& scene, const Mesh& me
 // its faces now stand for.
 void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions& o, const BakeProgress& progress, Stopwatch& clock,
                    BakeResult& r) {
+  const bool both_ways = o.refine == Refinement::Auto && r.refine.splits > 0;  // (when it only simplified, as a simplification)
   SurfaceSamples s;
   {
     SampleOptions so = o.samples;
     so.min_per_triangle = 0;
+    if (both_ways) so.per_triangle *= kBothWaysSampleFactor, so.density *= kBothWaysSampleFactor;
     if (so.density <= 0) so.per_triangle *= double(r.mesh.num_faces()) / double(std::max<size_t>(source.num_faces(), 1));
     const SurfaceSamples on_source = make_surface_samples(source, so);
     const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads, &on_source.normals);
@@ -731,7 +741,6 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
   r.fit_data.rays = stats.rays;
   r.rays += stats.rays;
   r.seconds_samples = clock.lap();
-  const bool both_ways = o.refine == Refinement::Auto && r.refine.splits > 0;  // (when it only simplified, as a simplification)
   if (both_ways && o.vertex_share > 0 && o.fit.method == FitMethod::LeastSquares) {
     // A second round of vertex rays, as the default bake's (fit): at most the vertices' own rays
     // again, where their noise costs most. Refinement's new vertices were traced at their closest

@@ -373,9 +373,10 @@ namespace {
 
 // Both ways at house_on_site's own count (issue 12, point 3): the same 2,710 triangles placed
 // where the transfer varies, against the input's own, one reference judging both (eval's: 20,000
-// points at 1024 rays). At the default seed 0.69x (0.684-0.718x over seeds 0-3, BENCHMARKS.md);
-// the bound, 0.71x, lies between that and what the bake did without its further cycle (0.72x) or
-// with refinement's old batches (0.85x). Seeds are fixed, so the figure is exact here.
+// points at 1024 rays). At the default seed 0.66x (0.659-0.700x over seeds 0-3, BENCHMARKS.md);
+// the bound, 0.68x, lies between that and what the bake did with half the fit's samples (0.69x),
+// without its further cycle (0.72x) or with refinement's old batches (0.85x). Seeds are fixed,
+// so the figure is exact here.
 TEST(ScenesBothWays, HouseOnSiteAtItsOwnCountBeatsItsOwnTrianglesByThirty) {
   const std::string dir = test::shared_scenes();
   if (dir.empty()) GTEST_SKIP() << "needs ../shared/scenes beside the checkout (present in CI)";
@@ -394,7 +395,7 @@ TEST(ScenesBothWays, HouseOnSiteAtItsOwnCountBeatsItsOwnTrianglesByThirty) {
   const double e_none = evaluate(ref, vertex_positions(none.mesh), none.mesh.triangles, none.mesh.source_face, none.transfer).rms_percent;
   const double e = evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, r.transfer).rms_percent;
   std::printf("house_on_site: input's own triangles %.3f%%, both ways %.3f%% (%.3fx)\n", e_none, e, e / e_none);
-  EXPECT_LT(e, 0.71 * e_none);
+  EXPECT_LT(e, 0.68 * e_none);
 }
 
 }  // namespace
