@@ -701,25 +701,34 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
     so.min_per_triangle = 0;
     if (both_ways) so.per_triangle *= kBothWaysSampleFactor, so.density *= kBothWaysSampleFactor;
     if (so.density <= 0) so.per_triangle *= double(r.mesh.num_faces()) / double(std::max<size_t>(source.num_faces(), 1));
-    const SurfaceSamples on_source = make_surface_samples(source, so);
-    const std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads, &on_source.normals);
+    // Each array is dropped as soon as what it holds has moved on: both ways' conference has
+    // 10.6M samples, and copies held side by side took its peak from 1.6 to 2.9 GB.
+    SurfaceSamples on_source = make_surface_samples(source, so);
+    on_source.barycentric.resize(0, 3), on_source.face = {}, on_source.weight = {}, on_source.begin = {};
+    std::vector<SurfaceLocation> at = closest_points(r.mesh, on_source.points, o.transfer.threads, &on_source.normals);
     // Group by the face they landed on (a counting sort keeps the source order within a face).
     const size_t F = r.mesh.num_faces(), S = at.size();
-    const Buckets by_face = bucket_sort(F, S, 1, [&](size_t k, uint32_t) { return at[k].face; });
+    Buckets by_face = bucket_sort(F, S, 1, [&](size_t k, uint32_t) { return at[k].face; });
     s.begin.assign(by_face.begin.begin(), by_face.begin.end());
     const std::vector<uint32_t>& order = by_face.entry;
-    s.points.resize(Eigen::Index(S), 3), s.normals.resize(Eigen::Index(S), 3), s.offsets.resize(Eigen::Index(S), 3);
     s.barycentric.resize(Eigen::Index(S), 3);
     s.face.resize(S), s.weight.resize(S);
     s.interpolated.assign(F, 0);
     for (size_t j = 0; j < S; ++j) {
-      const Eigen::Index row = Eigen::Index(j), from = Eigen::Index(order[j]);
       s.face[j] = at[order[j]].face;
-      s.barycentric.row(row) = at[order[j]].barycentric.transpose();
-      s.points.row(row) = on_source.points.row(from);
-      s.normals.row(row) = on_source.normals.row(from);
-      s.offsets.row(row) = on_source.offsets.row(from);
+      s.barycentric.row(Eigen::Index(j)) = at[order[j]].barycentric.transpose();
     }
+    at = {};
+    const auto permuted = [&](RowMatrixX3d& from) {
+      RowMatrixX3d to(Eigen::Index(S), 3);
+      for (size_t j = 0; j < S; ++j) to.row(Eigen::Index(j)) = from.row(Eigen::Index(order[j]));
+      from.resize(0, 3);
+      return to;
+    };
+    s.points = permuted(on_source.points);
+    s.normals = permuted(on_source.normals);
+    s.offsets = permuted(on_source.offsets);
+    by_face = {};
     for (size_t f = 0; f < F; ++f) {
       const size_t n = s.begin[f + 1] - s.begin[f];
       const Triangle& t = r.mesh.triangles[f];
