@@ -384,7 +384,9 @@ TEST(Bake, ABudgetBelowTheInputSimplifiesAndTheFitToTheSourceBeatsItsPointValues
   EXPECT_EQ(lsq.mesh.num_faces(), 451u);  // exact: the plane has a boundary
   EXPECT_TRUE(lsq.transfer.allFinite());
   EXPECT_EQ(lsq.transfer.rows(), static_cast<Eigen::Index>(lsq.mesh.num_vertices()));
-  EXPECT_GT(lsq.fit_data.samples.size(), 0u);
+  // As many samples on the input's surface as the fit would give the asset's faces (both ways
+  // takes twice as many).
+  EXPECT_NEAR(double(lsq.fit_data.samples.size()), o.samples.per_triangle * 451, 1.0);
   bool recorded = false;
   for (const auto& [k, v] : lsq.metadata) recorded |= k == "simplified";
   EXPECT_TRUE(recorded);
@@ -468,6 +470,9 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
     EXPECT_GT(r.simplify.collapses, 0u);
     EXPECT_GT(r.refine.splits, 0u);
     EXPECT_TRUE(r.transfer.allFinite());
+    // The fit samples the input's surface at twice the samples per triangle (kBothWaysSampleFactor),
+    // by area: the count is the asset's faces times 32, to the nearest sample the draw rounds to.
+    EXPECT_NEAR(double(r.fit_data.samples.size()), 2 * o.samples.per_triangle * double(T), 1.0);
     if (T != F) continue;
     const double e = evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, r.transfer).rms_percent;
     EXPECT_LT(e, 0.5 * e_none) << e << "% against the input's triangles' " << e_none << "%";
