@@ -731,10 +731,11 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
     const size_t F = r.mesh.num_faces(), S = size_t(s.points.rows());
     s.face.resize(S), s.barycentric.resize(Eigen::Index(S), 3);
     constexpr size_t kChunk = size_t(1) << 20;
+    const RayScene asset(r.mesh.positions, position_triangles(r.mesh));  // built once for every chunk
     for (size_t first = 0; first < S; first += kChunk) {
       const Eigen::Index at0 = Eigen::Index(first), n = Eigen::Index(std::min(kChunk, S - first));
       const RowMatrixX3d points = s.points.middleRows(at0, n), normals = s.normals.middleRows(at0, n);
-      const std::vector<SurfaceLocation> at = closest_points(r.mesh, points, o.transfer.threads, &normals);
+      const std::vector<SurfaceLocation> at = closest_points(r.mesh, asset, points, o.transfer.threads, &normals);
       for (Eigen::Index i = 0; i < n; ++i) s.face[size_t(at0 + i)] = at[size_t(i)].face, s.barycentric.row(at0 + i) = at[size_t(i)].barycentric.transpose();
     }
     // Group by the face they landed on (a counting sort keeps the source order within a face).

@@ -85,9 +85,14 @@ bool visit(RTCPointQueryFunctionArguments* args) {
 
 std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RowMatrixX3d& points, int threads, const RowMatrixX3d* normals) {
   if (mesh.num_faces() == 0) throw InputError("closest points: the mesh has no faces");
+  return closest_points(mesh, RayScene(mesh.positions, position_triangles(mesh)), points, threads, normals);
+}
+
+std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& points, int threads,
+                                            const RowMatrixX3d* normals) {
+  if (mesh.num_faces() == 0) throw InputError("closest points: the mesh has no faces");
   if (!points.allFinite()) throw InputError("closest points: a query point is not finite");
   if (normals && normals->rows() != points.rows()) throw InputError("closest points: one normal per query point expected");
-  const RayScene scene(mesh.positions, position_triangles(mesh));
   std::vector<SurfaceLocation> out(static_cast<size_t>(points.rows()));
   parallel_range<Eigen::Index>(points.rows(), threads, 256, [&](const tbb::blocked_range<Eigen::Index>& range) {
     for (Eigen::Index i = range.begin(); i != range.end(); ++i) {

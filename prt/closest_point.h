@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "prtsub/prt/ray_scene.h"
 #include "prtsub/subdiv/mesh.h"
 
 namespace prtsub {
@@ -22,6 +23,10 @@ struct SurfaceLocation {
 //! \throw InputError for a mesh without faces, a non-finite point or a normal count that does not
 //!        match; EmbreeError if Embree fails
 std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RowMatrixX3d& points, int threads = 0,
+                                            const RowMatrixX3d* normals = nullptr);
+//! The same with the mesh's scene built by the caller, once for several calls (points located in
+//! chunks): `scene` must be RayScene(mesh.positions, position_triangles(mesh)).
+std::vector<SurfaceLocation> closest_points(const Mesh& mesh, const RayScene& scene, const RowMatrixX3d& points, int threads = 0,
                                             const RowMatrixX3d* normals = nullptr);
 
 //! The closest point of triangle (a, b, c) to p, as barycentric weights of a, b, c.
