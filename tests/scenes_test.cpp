@@ -373,7 +373,7 @@ namespace {
 
 // Both ways at house_on_site's own count (issue 12, point 3): the same 2,710 triangles placed
 // where the transfer varies, against the input's own, one reference judging both (eval's: 20,000
-// points at 1024 rays). At the default seed 0.66x (0.659-0.700x over seeds 0-3, BENCHMARKS.md);
+// points at 1024 rays). At the default seed 0.66x (0.660-0.695x over seeds 0-3, docs/simplification.md);
 // the bound, 0.68x, lies between that and what the bake did with half the fit's samples (0.69x),
 // without its further cycle (0.72x) or with refinement's old batches (0.85x). Seeds are fixed,
 // so the figure is exact here.

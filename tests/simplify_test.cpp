@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <random>
 #include <set>
 
 #include "helpers.h"
@@ -308,6 +309,58 @@ TEST(Simplify, TheTransferMetricKeepsVerticesWhereTheSignalChanges) {
   };
   const double transfer = rms(SimplifyMetric::Transfer), geometry = rms(SimplifyMetric::Geometry);
   EXPECT_LT(transfer, 0.1 * geometry) << transfer << " against " << geometry;
+}
+
+TEST(Simplify, NoisyValuesAreRankedNetOfTheirNoise) {
+  // A flat grid whose left half carries a linear signal plus noise of known variance and whose
+  // right half a noise-free ripple. Ranked on the raw values, the noise looks like signal and
+  // the left half keeps vertices for it; told the variance, the collapses there cost what the
+  // (linear) signal loses, nothing, and the vertices go to the ripple. Error: RMS of the
+  // output's interpolant against the noise-free signal on the right half, at a fine lattice.
+  const double sigma = 0.05;
+  auto truth = [](const Eigen::Vector3d& p) {
+    return p.x() < 0.5 ? 0.2 + 0.1 * p.x() : 0.25 + 0.05 * std::sin(4 * M_PI * p.y()) * std::sin(2 * M_PI * (p.x() - 0.5));
+  };
+  struct Result {
+    size_t right = 0;  // surviving vertices with x > 0.5
+    double rms = 0;
+  };
+  auto run = [&](bool told) {
+    Mesh m = test::build(test::grid(40));
+    RowMatrixXd v = values_of(m, truth);
+    std::vector<double> variance(m.num_vertices(), 0.0);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> noise(0, sigma);
+    for (uint32_t i = 0; i < m.num_vertices(); ++i)
+      if (m.point(i).x() < 0.5 - 1e-9) v(i, 0) += noise(rng), variance[i] = sigma * sigma;
+    SimplifyOptions o{600};
+    o.geometry_weight = 0;  // flat: only the signal ranks
+    simplify(m, v, o, nullptr, {}, told ? &variance : nullptr);
+    EXPECT_EQ(m.num_faces(), 600u);
+    Result r;
+    for (uint32_t i = 0; i < m.num_vertices(); ++i) r.right += m.point(i).x() > 0.5 + 1e-9;
+    double sum = 0;
+    int n = 0;
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 20; ++i) {
+        const Eigen::Vector3d p(0.5 + (i + 0.5) / 40, (j + 0.5) / 40, 0);
+        for (const Triangle& t : m.triangles) {
+          const Eigen::Vector3d a = m.point(t[0]), b = m.point(t[1]), c = m.point(t[2]);
+          const double area = (b - a).cross(c - a).z();
+          const double l0 = (b - p).cross(c - p).z() / area, l1 = (c - p).cross(a - p).z() / area, l2 = 1 - l0 - l1;
+          if (l0 < -1e-12 || l1 < -1e-12 || l2 < -1e-12) continue;
+          sum += std::pow(l0 * v(t[0], 0) + l1 * v(t[1], 0) + l2 * v(t[2], 0) - truth(p), 2), ++n;
+          break;
+        }
+      }
+    EXPECT_EQ(n, 800);
+    r.rms = std::sqrt(sum / n);
+    return r;
+  };
+  const Result raw = run(false), net = run(true);
+  // Measured: 190 against 12 vertices on the right, RMS 0.0031 against 0.0065.
+  EXPECT_GT(net.right, 4 * raw.right) << net.right << " against " << raw.right;
+  EXPECT_LT(net.rms, 0.6 * raw.rms) << net.rms << " against " << raw.rms;
 }
 
 TEST(Simplify, FacesOpenMeshCannotTakeAreKeptAsTheyAre) {
