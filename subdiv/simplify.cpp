@@ -91,7 +91,7 @@ struct State {
   RowMatrixXd* values = nullptr;  // a corner collapse's moved render vertices get new estimates
   const std::vector<double>* variance = nullptr;  // per render vertex: its value's noise (none: taken as exact)
   double var(uint32_t r) const {
-    if (!variance || r >= variance->size()) return 0;
+    if (!variance) return 0;
     const double v = (*variance)[r];
     return std::isfinite(v) && v > 0 ? v : 0;
   }
@@ -483,6 +483,9 @@ SimplifyStats simplify_once(Mesh& mesh, RowMatrixXd& values, const SimplifyOptio
   stats.faces_before = mesh.num_faces();
   if (values.rows() != static_cast<Eigen::Index>(mesh.num_vertices()))
     throw InputError("simplify: " + std::to_string(values.rows()) + " value rows for " + std::to_string(mesh.num_vertices()) +
+                     " render vertices");
+  if (variance && variance->size() != mesh.num_vertices())
+    throw InputError("simplify: " + std::to_string(variance->size()) + " variances for " + std::to_string(mesh.num_vertices()) +
                      " render vertices");
   if (!(options.min_angle_deg >= 0 && options.min_angle_deg < 60))
     throw InputError("simplify: the minimum angle must be in [0, 60) degrees, got " + std::to_string(options.min_angle_deg));

@@ -389,6 +389,8 @@ TEST(Simplify, FacesOpenMeshCannotTakeAreKeptAsTheyAre) {
   EXPECT_THROW(simplify(m, v, bad), InputError);
   RowMatrixXd wrong(3, 1);
   EXPECT_THROW(simplify(m, wrong, SimplifyOptions{10}), InputError);
+  const std::vector<double> short_variance(m.num_vertices() - 1, 0.0);
+  EXPECT_THROW(simplify(m, v, SimplifyOptions{10}, nullptr, {}, &short_variance), InputError);
 }
 
 }  // namespace
