@@ -363,6 +363,29 @@ TEST(Simplify, NoisyValuesAreRankedNetOfTheirNoise) {
   EXPECT_LT(net.rms, 0.6 * raw.rms) << net.rms << " against " << raw.rms;
 }
 
+TEST(Simplify, UnknownOrZeroVariancesRankAsNoVariance) {
+  // NaN (a value whose noise is not known: spherical-Gaussian lobes) and 0 (exact) subtract
+  // nothing: the same collapses, to the bit, as without a variance.
+  auto run = [](const std::vector<double>* variance) {
+    Mesh m = test::build(test::grid(20, 0.3));
+    RowMatrixXd v = values_of(m, [](const Eigen::Vector3d& p) { return std::sin(6 * p.x()) + p.y(); }, 2);
+    std::vector<double> sized;
+    if (variance) sized.assign(m.num_vertices(), (*variance)[0]);
+    simplify(m, v, SimplifyOptions{150}, nullptr, {}, variance ? &sized : nullptr);
+    return std::make_pair(m, v);
+  };
+  const auto [m0, v0] = run(nullptr);
+  for (double x : {std::nan(""), 0.0}) {
+    const std::vector<double> one{x};
+    const auto [m1, v1] = run(&one);
+    EXPECT_EQ(m1.triangles, m0.triangles) << x;
+    EXPECT_EQ(v1, v0) << x;
+  }
+  // A variance that is known does change the ranking (else the cases above prove nothing).
+  const std::vector<double> known{0.05};
+  EXPECT_NE(run(&known).first.triangles, m0.triangles);
+}
+
 TEST(Simplify, FacesOpenMeshCannotTakeAreKeptAsTheyAre) {
   // A grid with a fin on one of its interior edges: three faces on that edge.
   RawMesh r = test::grid(10);
