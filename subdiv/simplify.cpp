@@ -20,8 +20,8 @@
 //   E_geom   = Σ_f area(f) · ((p1 − p0) · n_f)² over the faces around v0 before the collapse:
 //              the memoryless quadric (Lindstrom and Turk), evaluated where v0 goes.
 // Where the values are noisy estimates (traced transfer), d² above is on average the signal's
-// change plus what the corners' noise alone gives, v0 + w1²·v1 + ca²·va + cb²·vb for the
-// extension's weights: that is subtracted (the sum over faces clamped at zero), so that flat
+// change plus what the corners' noise alone gives, v0 + w1²·v1 + wa²·va + wb²·vb for the
+// extension's weights w of t's corners: that is subtracted (the sum over faces clamped at zero), so that flat
 // patches of noise are not kept for their noise (mori_knob at 10%: 4.335% to 4.192%).
 // Both are memoryless, as the paper combines them. The signal is SH in one global frame, so the
 // distance of the paper's equation 5 is the coefficient distance. Priority:
@@ -90,11 +90,6 @@ std::string short_number(double x) {
 struct State {
   RowMatrixXd* values = nullptr;  // a corner collapse's moved render vertices get new estimates
   const std::vector<double>* variance = nullptr;  // per render vertex: its value's noise (none: taken as exact)
-  double var(uint32_t r) const {
-    if (!variance) return 0;
-    const double v = (*variance)[r];
-    return std::isfinite(v) && v > 0 ? v : 0;
-  }
   const RowMatrixX3d* normals = nullptr;  // per render vertex (none: the guard that reads them is off)
   SimplifyOptions options;
   double diagonal = 1, cos_min_angle = 1, surface_tolerance = 0;
@@ -106,6 +101,12 @@ struct State {
   size_t corner_collapses = 0;
   size_t refused_flip = 0, refused_angle = 0, refused_line = 0, refused_side = 0, refused_surface = 0;  // evaluations refused
 
+  // Render vertex r's noise; an unknown one (NaN) counts as none.
+  double var(uint32_t r) const {
+    if (!variance) return 0;
+    const double v = (*variance)[r];
+    return std::isfinite(v) && v > 0 ? v : 0;
+  }
   uint32_t render_at(FaceHandle f, VertexHandle v) const {
     const auto& p = corner_pos[size_t(f.idx())];
     for (int k = 0; k < 3; ++k)

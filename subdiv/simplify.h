@@ -80,8 +80,9 @@ struct SimplifyStats {
 //! \param progress if given, told of collapses as they are made (in steps of 256), by every run
 //!        (a relaxed run after the strict one counts again)
 //! \param variance if given, #V: each value row's noise (its expected squared error, summed over
-//!        its columns; NaN or 0 where exact). The signal term is then measured net of what that
-//!        noise alone would give it, so that noise is not kept as if it were signal
+//!        its columns; 0 where exact, NaN where unknown, and either subtracts nothing). The signal
+//!        term is then measured net of what that noise alone would give it, so that noise is not
+//!        kept as if it were signal
 SimplifyStats simplify(Mesh& mesh, RowMatrixXd& values, const SimplifyOptions& options,
                        std::vector<uint32_t>* removed_to = nullptr, const std::function<void(size_t collapses)>& progress = {},
                        const std::vector<double>* variance = nullptr);
