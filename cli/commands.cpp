@@ -466,7 +466,9 @@ int cmd_eval(int argc, char** argv) {
                  "Surface RMS transfer error of an asset, as a percentage of ||t_unshadowed||, at seeded area-\n"
                  "stratified points on its source surface against a reference with many more rays. Each point is\n"
                  "located in the asset through source_face, so any refinement can be judged on the same points;\n"
-                 "in a simplified asset (whose faces no longer lie in the source's), at its closest point.");
+                 "in a simplified asset (whose faces no longer lie in the source's), at its closest point.\n"
+                 "An asset baked from another mesh of the same object (a level of detail made by another tool)\n"
+                 "is judged with --locate closest.");
   args.positional("ASSET", "an asset written by prtsub bake (.ply, .glb or .gltf; transfer or ao)", &input);
   args.option("--source", "INPUT", "the mesh the asset was baked from (required)", &source);
   args.option("--points", "N", "reference points", &ro.points, size_t(1), size_t(10000000));
@@ -481,10 +483,15 @@ int cmd_eval(int argc, char** argv) {
   args.option("--reference-albedo", "A|R,G,B|vertex|map:PATH", "the reference bounces at this albedo instead of the asset's (default\n"
               "the asset's, else 0.8); a coloured one judges a grey asset as the same in every channel: what\n"
               "baking without colour costs", &reference_albedo);
+  std::string locate = "auto";
+  args.option("--locate", "auto|source-face|closest", "how a reference point finds its place in the asset: through source_face,\n"
+              "or at its closest point facing its way; auto: closest for a simplified asset [default auto]", &locate);
   add_threads_option(args, ro.threads);
   add_report_option(args, report);
   if (!args.parse(argc, argv, 2)) return 0;
   if (source.empty()) throw UsageError("eval: missing --source INPUT");
+  if (locate != "auto" && locate != "source-face" && locate != "closest")
+    throw UsageError("eval: --locate must be auto, source-face or closest, got '" + locate + "'");
   if (!report.empty()) check_writable(report);
   Stopwatch clock;
   const Asset asset = read_asset(input);
@@ -527,13 +534,15 @@ int cmd_eval(int argc, char** argv) {
   const Reference ref = make_reference(src, scene, ro, [&](size_t n) { progress.add(n); });
   progress.finish();
   const double t_ref = clock.lap();
-  // A simplified asset's faces do not lie in the source's: locate by closest point.
-  const bool closest = meta.count("simplified") > 0;
+  // A simplified asset's faces do not lie in the source's: locate by closest point. So too for an
+  // asset baked from another mesh of the object, whose source_face numbers that mesh's faces.
+  const bool simplified = meta.count("simplified") > 0;
+  const bool closest = locate == "closest" || (locate == "auto" && simplified);
   const EvalResult e = closest ? evaluate_by_closest_point(ref, asset.positions, asset.triangles, judged, ro.threads)
                                : evaluate(ref, asset.positions, asset.triangles, asset.source_face, judged);
   Report r;
   r.set("command", "eval");
-  r.set("location", closest ? "closest point (a simplified asset)" : "source_face");
+  r.set("location", !closest ? "source_face" : simplified ? "closest point (a simplified asset)" : "closest point");
   r.set("input", input);
   r.set("source", source);
   r.set("triangles", asset.triangles.size());
@@ -562,7 +571,10 @@ int cmd_eval(int argc, char** argv) {
     r.print(stdout, {"  bounced:    {reference_bounces} bounces at albedo {albedo}: {reference_paths} paths per point through the source "
                      "({seconds_reference_bounces:2} s), not the asset"});
   r.print(stdout, {"  error:      RMS {rms_percent:3}%, 95th percentile {p95_percent:3}% of ||t_unshadowed||"});
-  if (e.unlocated) r.print(stdout, {"  warning:    {unlocated_points} reference points had no face in the asset"});
+  if (e.unlocated)
+    r.print(stdout, {closest ? "  warning:    {unlocated_points} reference points had no face in the asset"
+                             : "  warning:    {unlocated_points} reference points had no face in the asset (baked from another mesh? "
+                               "--locate closest)"});
   if (!report.empty()) r.write(report);
   return 0;
 }
