@@ -5,8 +5,9 @@
 // H(w)] is a model of the visibility whose blocked integral C = ∫dw ∫_H^1 y du has no rays in it
 // (Gauss–Legendre). A lattice of R rays at an independent shift then estimates what the model
 // misses, ∫∫ (g − V) y: t = t_u − π (C + (1/R) Σ (g_k − V_k) y_k), unbiased for any H.
-// Compared at equal rays (M·d + R) with two halves (the library's shape) and one lattice, all by
-// their mean squared error over random vertices against one lattice of 16,384 rays. The last two
+// Compared at equal rays (M·d + R) with two halves (the library's shape), one lattice and as many
+// independent points, all by their mean squared error over random vertices against one lattice of
+// 16,384 rays. The last two
 // columns: the share of the residual lattice's rays that were blocked, and of those where the
 // model was wrong (what the lattice is left to estimate).
 // usage: bash bench/cpp.sh BUILD horizon_cv SCENE [ORDER] [VERTICES]
@@ -68,9 +69,11 @@ void add_y(int order, const Eigen::Vector3d& d, double w, double* acc) {
   for (int c = 0; c < order * order; ++c) acc[c] += w * y[c];
 }
 
-// Plain lattice: t_u − (π/N) Σ_blocked y.
-void plain(const RayScene& scene, const Vertex& v, int order, uint32_t n, Rng& rng, double* out) {
-  const auto uv = lattice(n, rng.uniform(), rng.uniform());
+// Plain lattice (or independent points): t_u − (π/N) Σ_blocked y.
+void plain(const RayScene& scene, const Vertex& v, int order, uint32_t n, Rng& rng, double* out, bool independent = false) {
+  auto uv = lattice(n, rng.uniform(), rng.uniform());
+  if (independent)
+    for (auto& p : uv) p = {rng.uniform(), rng.uniform()};
   const auto vis = trace(scene, v, uv);
   unshadowed_transfer(order, v.n, out);
   for (size_t k = 0; k < uv.size(); ++k)
@@ -212,6 +215,8 @@ int main(int argc, char** argv) {
       }
       return uint64_t(n);
     });
+    std::snprintf(name, sizeof name, "%u independent points", n);
+    measure(name, [&](const Vertex& v, Rng& rng, double* out) { return plain(scene, v, order, n, rng, out, true), uint64_t(n); });
     std::snprintf(name, sizeof name, "one lattice of %u", n);
     measure(name, [&](const Vertex& v, Rng& rng, double* out) { return plain(scene, v, order, n, rng, out), uint64_t(n); });
   }
