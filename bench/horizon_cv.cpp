@@ -7,9 +7,8 @@
 // misses, ∫∫ (g − V) y: t = t_u − π (C + (1/R) Σ (g_k − V_k) y_k), unbiased for any H.
 // Compared at equal rays (M·d + R) with two halves (the library's shape), one lattice and as many
 // independent points, all by their mean squared error over random vertices against one lattice of
-// 16,384 rays. The last two
-// columns: the share of the residual lattice's rays that were blocked, and of those where the
-// model was wrong (what the lattice is left to estimate).
+// 16,384 rays. The last two columns: the share of the residual lattice's rays that were blocked,
+// and of those where the model was wrong (what the lattice is left to estimate).
 // usage: bash bench/cpp.sh BUILD horizon_cv SCENE [ORDER] [VERTICES]
 #include <algorithm>
 #include <cmath>
