@@ -9,7 +9,10 @@
 // independent points, all by their mean squared error over random vertices against one lattice of
 // 16,384 rays. The last two columns: the share of the residual lattice's rays that were blocked,
 // and of those where the model was wrong (what the lattice is left to estimate).
-// usage: bash bench/cpp.sh BUILD horizon_cv SCENE [ORDER] [VERTICES]
+// With WARP=1 it measures instead lattices warped in u to crowd their points below the least
+// elevation anything blocks: with that u from the reference (an oracle), and as two halves whose
+// second rounds are warped by the other half's first (what a bake could do).
+// usage: [WARP=1] bash bench/cpp.sh BUILD horizon_cv SCENE [ORDER] [VERTICES]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -33,6 +36,7 @@ double g_blocked = 0, g_missed = 0, g_seen = 0;
 struct Vertex {
   Eigen::Vector3d n, t, b;
   Eigen::Vector3f origin;
+  double least = 1;  // the least u of a blocked ray of the reference
 };
 
 Eigen::Vector3d world(const Vertex& v, double u, double w) {
@@ -160,6 +164,50 @@ uint64_t horizon_cv(const RayScene& scene, const Vertex& v, int order, uint32_t 
   return uint64_t(M) * uint64_t(steps) + R;
 }
 
+// A lattice of n points warped in u: a share alpha·c of them in [0, c), the rest in [c, 1], each
+// weighed by its cell's measure; adds −(π/n)·Σ_blocked weight·y to out, and returns the least u of a
+// blocked point (1 if none).
+double warped(const RayScene& scene, const Vertex& v, int order, uint32_t n, double c, double alpha, Rng& rng, double* out) {
+  auto uv = lattice(n, rng.uniform(), rng.uniform());
+  const double rho = alpha * c;  // the share of points in [0, c)
+  for (auto& p : uv) {
+    const double x = p.x();
+    p.x() = x < rho ? x / rho * c : c + (x - rho) / (1 - rho) * (1 - c);
+  }
+  const auto vis = trace(scene, v, uv);
+  double least = 1;
+  for (size_t k = 0; k < uv.size(); ++k) {
+    if (vis[k]) continue;
+    const double u = uv[k].x(), w = u < c ? c / rho : (1 - c) / (1 - rho);
+    least = std::min(least, u);
+    add_y(order, world(v, u, uv[k].y()), -M_PI * w / double(n), out);
+  }
+  return least;
+}
+
+// Two halves, each a first round of n1 plain points and a second of n2 warped by the *other*
+// half's first round: its least blocked u less a margin (so each half's warp is independent of
+// its own rays, as the library's halves choose each other's β). Each half's rounds are averaged
+// by their rays.
+uint64_t warped_halves(const RayScene& scene, const Vertex& v, int order, uint32_t n1, uint32_t n2, double margin, double alpha,
+                       Rng& rng, double* out) {
+  const int K = order * order;
+  std::vector<double> first[2], second[2];
+  double least[2];
+  for (int h = 0; h < 2; ++h) {
+    first[h].assign(size_t(K), 0.0);
+    least[h] = warped(scene, v, order, n1, 0, alpha, rng, first[h].data());
+  }
+  unshadowed_transfer(order, v.n, out);
+  for (int h = 0; h < 2; ++h) {
+    second[h].assign(size_t(K), 0.0);
+    warped(scene, v, order, n2, std::max(0.0, least[1 - h] - margin), alpha, rng, second[h].data());
+    const double a = double(n1) / double(n1 + n2);
+    for (int c = 0; c < K; ++c) out[c] += 0.5 * (a * first[h][size_t(c)] + (1 - a) * second[h][size_t(c)]);
+  }
+  return 2ull * (n1 + n2);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -218,6 +266,31 @@ int main(int argc, char** argv) {
     measure(name, [&](const Vertex& v, Rng& rng, double* out) { return plain(scene, v, order, n, rng, out, true), uint64_t(n); });
     std::snprintf(name, sizeof name, "one lattice of %u", n);
     measure(name, [&](const Vertex& v, Rng& rng, double* out) { return plain(scene, v, order, n, rng, out), uint64_t(n); });
+  }
+  for (size_t i = 0; i < verts.size(); ++i) {
+    std::vector<double> scratch(static_cast<size_t>(K), 0.0);
+    Rng r2(78, 0);
+    verts[i].least = warped(scene, verts[i], order, 16384, 0, 0.1, r2, scratch.data());
+  }
+  if (std::getenv("WARP")) {
+    for (double alpha : {0.05, 0.2})
+      for (uint32_t n : {256u, 512u}) {
+        char name[96];
+        std::snprintf(name, sizeof name, "oracle: one lattice of %u warped at the reference's least u, alpha %.2f", n, alpha);
+        measure(name, [&](const Vertex& v, Rng& rng, double* out) {
+          unshadowed_transfer(order, v.n, out);
+          warped(scene, v, order, n, v.least, alpha, rng, out);
+          return uint64_t(n);
+        });
+      }
+    for (double margin : {0.05, 0.15})
+      for (double alpha : {0.1, 0.3})
+        for (uint32_t n : {256u, 512u}) {
+          char name[96];
+          std::snprintf(name, sizeof name, "warped halves 2 x (64 + %u), margin %.2f, alpha %.1f", n / 2 - 64, margin, alpha);
+          measure(name, [&](const Vertex& v, Rng& rng, double* out) { return warped_halves(scene, v, order, 64, n / 2 - 64, margin, alpha, rng, out); });
+        }
+    return 0;
   }
   for (uint32_t M : {16u, 32u, 64u})
     for (int d : {4, 6}) {
