@@ -161,8 +161,9 @@ void BakeCli::add_refinement(ArgParser& args) {
               &bake.simplify.surface_tolerance, 1e-6, 0.04);
   args.option("--auto-share", "S", "auto: simplify to this share of min(budget, input) before refining", &bake.auto_share,
               1e-6, 1.0);
-  args.option("--auto-cycles", "N", "auto: further cycles, each collapsing a tenth of the budget where the refined mesh is\n"
+  args.option("--auto-cycles", "N", "auto: further cycles, each collapsing a share of the budget where the refined mesh is\n"
               "smoothest and refining back to it", &bake.auto_cycles, 0, 8);
+  args.option("--auto-cycle-share", "S", "auto: the share of the budget each further cycle collapses", &bake.auto_cycle_share, 1e-6, 0.5);
   args.choice("--simplify-metric", "adaptive below the input: rank collapses by the transfer's change and the geometry, or the "
               "geometry alone", &bake.simplify.metric, {SimplifyMetric::Transfer, SimplifyMetric::Geometry}, simplify_metric_name);
   args.flag("--lock-corners", "adaptive below the input, auto: never collapse a vertex where three or more creases or seams\n"

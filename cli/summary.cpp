@@ -241,6 +241,7 @@ void record(Report& r, const BakeResult& res, const BakeOptions& o) {
     if (o.refine == Refinement::Auto) {
       r.set("auto_share", o.auto_share), r.set("simplified_to", res.simplify.faces_after);
       r.set("auto_cycles", res.auto_cycles), r.set("auto_cycle_collapses", res.auto_cycle_collapses);
+      r.set("auto_cycle_share", o.auto_cycle_share);
     }
   }
   if (o.refine == Refinement::Uniform) r.set("levels", o.uniform.levels), r.set("scheme", uniform_scheme_name(o.uniform.scheme));
@@ -366,7 +367,7 @@ void print_bake_summary(const Report& r) {
                      "surface moves (tolerance reached {surface_tolerance_percent:2}% of the diagonal)"});
   if (r.format("{refine}") == "auto")
     r.print(stdout, {"  both ways:  simplified to {simplified_to} triangles (auto share {auto_share}), then refined to the budget; "
-                     "{auto_cycles} further cycle(s) of {auto_cycle_collapses} collapses and refining back"});
+                     "{auto_cycles} further cycle(s) of {auto_cycle_collapses} collapses (share {auto_cycle_share} each) and refining back"});
   if (adaptive && (r.format("{simplified}") != "yes" || r.format("{refine}") == "auto"))
     r.print(stdout, {"  refine:     adaptive, estimate {estimate}, {splits} splits ({boundary_splits} boundary, "
                      "{pre_refinement_splits} pre-refinement) in {batches} batches",

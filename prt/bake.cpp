@@ -105,6 +105,8 @@ void check_bake_options(const BakeOptions& o) {
     throw InputError(std::string(refinement_name(o.refine)) + " refinement needs a triangle budget");
   if (!(o.auto_share > 0 && o.auto_share <= 1)) throw InputError("auto refinement: the share to simplify to must be in (0, 1], got " + std::to_string(o.auto_share));
   if (o.auto_cycles < 0 || o.auto_cycles > 8) throw InputError("auto refinement: further cycles must be 0 to 8, got " + std::to_string(o.auto_cycles));
+  if (!(o.auto_cycle_share > 0 && o.auto_cycle_share <= 0.5))
+    throw InputError("auto refinement: the share a cycle collapses must be in (0, 0.5], got " + std::to_string(o.auto_cycle_share));
   if (o.refine == Refinement::Uniform && (o.uniform.levels < 1 || o.uniform.levels > 8))
     throw InputError("uniform refinement: levels must be between 1 and 8, got " + std::to_string(o.uniform.levels));
   if (!(o.target_error >= 0) || !std::isfinite(o.target_error))
@@ -242,8 +244,8 @@ Metadata bake_metadata(const BakeOptions& o, const BakeResult& r) {
   if (o.refine == Refinement::Auto)
     m.push_back({"auto", "simplified to " + std::to_string(r.simplify.faces_after) + " triangles (share " + std::to_string(o.auto_share) +
                              "), then refined to " + std::to_string(r.mesh.num_faces()) + "; new vertices traced at their closest input points; " +
-                             std::to_string(r.auto_cycles) + " further cycle(s) collapsed " + std::to_string(r.auto_cycle_collapses) +
-                             " times and refined back"});
+                             std::to_string(r.auto_cycles) + " further cycle(s) (share " + std::to_string(o.auto_cycle_share) +
+                             ") collapsed " + std::to_string(r.auto_cycle_collapses) + " times and refined back"});
   if (o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) {
     m.push_back({"budget", std::to_string(o.adaptive.budget)});
     m.push_back({"estimate", estimate_name(o.estimate)});
@@ -541,7 +543,7 @@ void refine_both_ways(const Mesh& source, const RayScene& scene, const BakeOptio
   // and refining back on fresh keys moves triangles from where they turned out to buy little to
   // where they buy most (house_on_site 9.49% to 9.17% over four seeds; BENCHMARKS.md).
   for (int c = 0; c < o.auto_cycles && r.mesh.num_faces() == T && r.refine.splits > 0 && r.simplify.collapses > 0; ++c) {
-    down.adaptive.budget = static_cast<size_t>(0.9 * double(T));
+    down.adaptive.budget = static_cast<size_t>((1 - o.auto_cycle_share) * double(T));
     down.simplify.max_surface_tolerance = down.simplify.surface_tolerance;
     const SimplifyStats first = r.simplify;  // the summary's: the first pass, with every pass's collapses
     std::vector<uint32_t> to;

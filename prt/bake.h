@@ -83,10 +83,15 @@ struct BakeOptions {
   //! refinement spends the rest where the transfer varies; 0.8 measured best on sibenik of
   //! 0.5-0.95 (BENCHMARKS.md, "Both ways")
   double auto_share = 0.8;
-  //! Auto: further cycles after the first, each collapsing a tenth of the budget where the refined
-  //! mesh is smoothest (the ranking now sees refinement's traced vertices) and refining back to
-  //! the budget on fresh keys; one cut the error by 0-6% on eight scenes (BENCHMARKS.md)
+  //! Auto: further cycles after the first, each collapsing auto_cycle_share of the budget where
+  //! the refined mesh is smoothest (the ranking now sees refinement's traced vertices) and
+  //! refining back to the budget on fresh keys; one cut the error by 0-6% on eight scenes
+  //! (BENCHMARKS.md)
   int auto_cycles = 1;
+  //! Auto: the share of the budget each further cycle collapses, in (0, 0.5]. Smaller cycles move
+  //! fewer triangles each: four of 0.03 beat one of 0.1 on five of eight scenes and lost 5% on
+  //! conference (BENCHMARKS.md, "Cycles of another size")
+  double auto_cycle_share = 0.1;
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
   FitOptions fit;                              //!< vertex values: point samples, or fitted to surface samples

@@ -69,7 +69,7 @@ std::string options_text(const BatchOptions& b, const std::string& output) {
     << " " << p.holdout << " " << p.first_share << " " << p.first_significance << " screen " << p.screen_ratio << " " << p.screen_samples << "\n";
   const SimplifyOptions& q = o.simplify;
   s << "simplify " << simplify_metric_name(q.metric) << " " << q.geometry_weight << " " << q.min_angle_deg << " " << q.feature_tolerance << " "
-    << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << " " << o.auto_cycles << "\n";
+    << q.surface_tolerance << " " << q.max_surface_tolerance << " " << o.simplified_alpha << " auto " << o.auto_share << " " << o.auto_cycles << " " << o.auto_cycle_share << "\n";
   s << "stage " << (o.refine_only ? "refine" : "all") << "\n";
   s << "basis " << (o.sg_lobes > 0 ? "sg " + std::to_string(o.sg_lobes) + (o.sg_signed ? " signed" : " non-negative") : std::string("sh")) << "\n";
   s << "bounce " << o.bounce.bounces << " " << o.bounce.until_converged << " " << o.bounce.albedo << " " << o.bounce.fit_samples << " rekey " << o.rekey_share << "\n";

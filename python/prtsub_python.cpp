@@ -138,6 +138,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "levels") o.uniform.levels = value.cast<int>();
     else if (key == "auto_share") o.auto_share = value.cast<double>();
     else if (key == "auto_cycles") o.auto_cycles = value.cast<int>();
+    else if (key == "auto_cycle_share") o.auto_cycle_share = value.cast<double>();
     else if (key == "simplify_metric") o.simplify.metric = parse_simplify_metric(value.cast<std::string>());
     else if (key == "min_angle") o.simplify.min_angle_deg = value.cast<double>();
     else if (key == "lock_corners") o.simplify.collapse_corners = !value.cast<bool>();
@@ -168,7 +169,7 @@ BakeOptions bake_options(const py::kwargs& kw, std::string& source) {
     else if (key == "source") source = value.cast<std::string>();
     else
       throw py::type_error("bake() got an unexpected keyword argument '" + key +
-                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, basis, sg_signed, fit, alpha, refine, budget, levels, auto_share, auto_cycles, simplify_metric, min_angle, lock_corners, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
+                           "' (order, max_order, order_tolerance, rays, first_rays, ray_noise, seed, threads, signal, basis, sg_signed, fit, alpha, refine, budget, levels, auto_share, auto_cycles, auto_cycle_share, simplify_metric, min_angle, lock_corners, simplify_alpha, error, sample_rays, bounces, albedo, albedo_map, bounce_rekey, source)");
   }
   if ((o.refine == Refinement::Adaptive || o.refine == Refinement::Auto) && o.adaptive.budget == 0)
     throw InputError(std::string("refine='") + refinement_name(o.refine) + "' needs budget=T triangles");

@@ -541,6 +541,20 @@ TEST(Bake, BothWaysReachesAnyBudgetAndAtTheInputsCountBeatsItsTriangles) {
       if (cycles == 0) EXPECT_EQ(flagged, b.refine.new_vertices);  // nothing collapsed after refining
       else EXPECT_GT(b.auto_cycle_collapses, r.auto_cycle_collapses);
     }
+    {
+      // Smaller cycles: each collapses 3% of the budget (two faces a collapse, one on a boundary),
+      // so two of them fewer times than one of a tenth.
+      BakeOptions c = o;
+      c.auto_cycles = 2, c.auto_cycle_share = 0.03, c.samples.per_triangle = 4;
+      const BakeResult b = bake(mesh, c);
+      EXPECT_EQ(b.auto_cycles, 2);
+      EXPECT_EQ(b.mesh.num_faces(), T);
+      EXPECT_GT(b.auto_cycle_collapses, 0u);
+      EXPECT_LE(double(b.auto_cycle_collapses), 2 * (0.03 * double(T)));
+      EXPECT_LT(b.auto_cycle_collapses, r.auto_cycle_collapses);
+      c.auto_cycle_share = 0.6;
+      EXPECT_THROW(bake(mesh, c), InputError);
+    }
     o.transfer.threads = 2;
     EXPECT_EQ((bake(mesh, o).transfer - r.transfer).cwiseAbs().maxCoeff(), 0.0) << "any thread count";
     o.transfer.threads = 1;

@@ -88,6 +88,7 @@ TEST(Batch, TheKeyChangesWithEveryOptionThatChangesTheAssetAndNotWithThreads) {
       {"stage", [](BatchOptions& o) { o.bake.refine_only = true; }},
       {"auto share", [](BatchOptions& o) { o.bake.auto_share = 0.25; }},
       {"auto cycles", [](BatchOptions& o) { o.bake.auto_cycles = 0; }},
+      {"auto cycle share", [](BatchOptions& o) { o.bake.auto_cycle_share = 0.03; }},
       {"crease angle", [](BatchOptions& o) { o.load.crease_angle_deg = 30; }},
       {"up", [](BatchOptions& o) { o.gltf.up = UpAxis::Z; }},
       {"quantize", [](BatchOptions& o) { o.gltf.quantize = true; }},
