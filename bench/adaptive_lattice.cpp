@@ -32,14 +32,13 @@
 #include "prtsub/prt/vertex_top_up.h"
 #include "prtsub/subdiv/mesh_io.h"
 #include "prtsub/subdiv/random.h"
+#include "random_vertices.h"
 
 using namespace prtsub;
 
 namespace {
 
-struct Vertex {
-  Eigen::Vector3d n, t, b;
-  Eigen::Vector3f origin;
+struct Vertex : BenchVertex {
   double s, u;  // the lattice's shift
 };
 
@@ -259,19 +258,9 @@ int main(int argc, char** argv) {
   const int ref_levels = argc > 4 ? std::atoi(argv[4]) : 8;  // 256·2^8 = 65536
   const Mesh mesh = load_mesh(argv[1]);
   const RayScene scene(mesh.positions, position_triangles(mesh));
-  const RowMatrixX3d offsets = vertex_offset_directions(mesh), points = vertex_positions(mesh);
   const int K = order * order;
-  Rng pick(3, 0);
   std::vector<Vertex> verts;
-  for (int i = 0; i < count; ++i) {
-    const auto id = Eigen::Index(pick.next() % uint64_t(mesh.num_vertices()));
-    Vertex v;
-    v.n = mesh.normals.row(id).transpose();
-    tangent_frame(v.n, v.t, v.b);
-    const Eigen::Vector3f local = scene.to_local(points.row(id).transpose());
-    v.origin = local + scene.ray_offset(local) * Eigen::Vector3d(offsets.row(id).transpose()).cast<float>();
-    verts.push_back(v);
-  }
+  for (const BenchVertex& b : random_vertices(mesh, scene, count)) verts.push_back({b, 0, 0});
   // Reference at seed-independent shifts.
   std::vector<std::vector<double>> ref(verts.size(), std::vector<double>(size_t(K)));
   const Lattices refL(256, ref_levels);

@@ -25,6 +25,7 @@
 #include "prtsub/prt/transfer.h"
 #include "prtsub/subdiv/mesh_io.h"
 #include "prtsub/subdiv/random.h"
+#include "random_vertices.h"
 
 using namespace prtsub;
 
@@ -33,9 +34,7 @@ namespace {
 // The residual lattice's rays: how many were blocked, and where the horizon model was wrong.
 double g_blocked = 0, g_missed = 0, g_seen = 0;
 
-struct Vertex {
-  Eigen::Vector3d n, t, b;
-  Eigen::Vector3f origin;
+struct Vertex : BenchVertex {
   double least = 1;  // the least u of a blocked ray of the reference
 };
 
@@ -215,19 +214,9 @@ int main(int argc, char** argv) {
   const int order = argc > 2 ? std::atoi(argv[2]) : 4, count = argc > 3 ? std::atoi(argv[3]) : 500;
   const Mesh mesh = load_mesh(argv[1]);
   const RayScene scene(mesh.positions, position_triangles(mesh));
-  const RowMatrixX3d offsets = vertex_offset_directions(mesh), points = vertex_positions(mesh);
   const int K = order * order;
-  Rng pick(3, 0);
   std::vector<Vertex> verts;
-  for (int i = 0; i < count; ++i) {
-    const auto id = Eigen::Index(pick.next() % uint64_t(mesh.num_vertices()));
-    Vertex v;
-    v.n = mesh.normals.row(id).transpose();
-    tangent_frame(v.n, v.t, v.b);
-    const Eigen::Vector3f local = scene.to_local(points.row(id).transpose());
-    v.origin = local + scene.ray_offset(local) * Eigen::Vector3d(offsets.row(id).transpose()).cast<float>();
-    verts.push_back(v);
-  }
+  for (const BenchVertex& b : random_vertices(mesh, scene, count)) verts.push_back({b});
   std::vector<std::vector<double>> ref(verts.size(), std::vector<double>(size_t(K)));
   Rng rs(77, 0);
   for (size_t i = 0; i < verts.size(); ++i) plain(scene, verts[i], order, 16384, rs, ref[i].data());
