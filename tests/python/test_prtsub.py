@@ -200,12 +200,13 @@ class BakeTest(unittest.TestCase):
             prtsub.bake(sphere, refine="adaptive", budget=100, simplify_metric="sideways")
 
     def test_both_ways_reaches_the_budget_as_the_tool_does(self):
-        sphere, ours, tool = self.bake_both("a", ["--rays", "16", "--refine", "auto", "--budget", "300", "--auto-share", "0.7"],
-                                            rays=16, refine="auto", budget=300, auto_share=0.7)
+        sphere, ours, tool = self.bake_both("a", ["--rays", "16", "--refine", "auto", "--budget", "300", "--auto-share", "0.7",
+                                                  "--auto-cycles", "2", "--auto-cycle-share", "0.05"],
+                                            rays=16, refine="auto", budget=300, auto_share=0.7, auto_cycles=2, auto_cycle_share=0.05)
         self.assertEqual(len(ours.faces), 300)
         np.testing.assert_array_equal(ours.faces, tool.faces)
         np.testing.assert_allclose(ours.transfer, tool.transfer, rtol=0, atol=1e-6)
-        self.assertTrue(any(k == "auto" for k, _ in ours.metadata))
+        self.assertTrue(any(k == "auto" and "further cycle(s) (share 0.050000)" in v for k, v in ours.metadata), ours.metadata)
         with self.assertRaises(prtsub.InputError):
             prtsub.bake(sphere, refine="auto")  # no budget
 
