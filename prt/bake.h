@@ -89,8 +89,8 @@ struct BakeOptions {
   //! (BENCHMARKS.md)
   int auto_cycles = 1;
   //! Auto: the share of the budget each further cycle collapses, in (0, 0.5]. Smaller cycles move
-  //! fewer triangles each: four of 0.03 beat one of 0.1 on five of eight scenes and lost 5% on
-  //! conference (BENCHMARKS.md, "Cycles of another size")
+  //! fewer triangles each: four of 0.03 beat one of 0.1 by 2-3% on four of eight scenes, tied on
+  //! two, and lost 1.6% on mori_knob and 5% on conference (BENCHMARKS.md, "Cycles of another size")
   double auto_cycle_share = 0.1;
   EdgeEstimate estimate = EdgeEstimate::Root;  //!< Adaptive: the edge error estimate
   UniformOptions uniform;                      //!< Uniform: levels and scheme
