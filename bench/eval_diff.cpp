@@ -1,9 +1,9 @@
 // Where does asset B lose to asset A? Both are judged as `eval --locate closest` judges them: one
 // reference on the source (eval's defaults but RAYS rays a point), each point located at its
-// closest facing point of each asset. Prints both RMS (unweighted, so a little off eval's
-// area-weighted figure) and the source faces that gain most squared error from A to B, each
-// with its share of the total gain, its point count, its centre and its normal: a loss spread
-// over the surface, or one feature broken.
+// closest facing point of each asset (evaluate_by_closest_point, asked for each point's error).
+// Prints both RMS, as eval does, and the source faces that gain most squared error from A to B,
+// each with its share of the total gain, its point count, its centre and its normal: a loss
+// spread over the surface, or one feature broken.
 // usage: bash bench/cpp.sh BUILD eval_diff SOURCE A B [RAYS] [FACES]
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "prtsub/prt/asset.h"
-#include "prtsub/prt/closest_point.h"
 #include "prtsub/prt/evaluate.h"
 #include "prtsub/subdiv/mesh_io.h"
 
@@ -21,20 +20,11 @@ using namespace prtsub;
 
 namespace {
 
-// Each reference point's squared error in the asset, located at its closest facing point.
+// Each reference point's squared error in the asset, in units of ‖t_unshadowed‖².
 std::vector<double> squared_errors(const Reference& ref, const Asset& a) {
-  Mesh m;
-  m.positions = a.positions, m.triangles = a.triangles, m.normals = a.normals, m.source_face = a.source_face;
-  m.vertex_position.resize(size_t(a.positions.rows()));
-  for (size_t i = 0; i < m.vertex_position.size(); ++i) m.vertex_position[i] = uint32_t(i);
-  const std::vector<SurfaceLocation> at = closest_points(m, ref.points, 0, &ref.normals);
-  std::vector<double> e(at.size());
-  for (size_t k = 0; k < at.size(); ++k) {
-    const Triangle& t = a.triangles[at[k].face];
-    Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(a.transfer.cols());
-    for (int c = 0; c < 3; ++c) g += at[k].barycentric[c] * a.transfer.row(t[c]);
-    e[k] = (g - ref.transfer.row(Eigen::Index(k))).squaredNorm();
-  }
+  std::vector<double> e;
+  evaluate_by_closest_point(ref, a.positions, a.triangles, a.transfer, 0, &e);
+  for (double& x : e) x *= x;
   return e;
 }
 
@@ -51,10 +41,10 @@ int main(int argc, char** argv) {
   const int faces = argc > 5 ? std::atoi(argv[5]) : 15;
   const Reference ref = make_reference(source, scene, ro);
   const std::vector<double> ea = squared_errors(ref, A), eb = squared_errors(ref, B);
-  const double unit = std::pow(unshadowed_norm(A.order), 2) * double(ea.size());
+  const double unit = double(ea.size());
   double sa = 0, sb = 0;
   for (size_t k = 0; k < ea.size(); ++k) sa += ea[k], sb += eb[k];
-  std::printf("%zu points, %d rays: RMS A %.3f%%, B %.3f%% (unweighted)\n", ea.size(), ro.rays, 100 * std::sqrt(sa / unit),
+  std::printf("%zu points, %d rays: RMS A %.3f%%, B %.3f%%\n", ea.size(), ro.rays, 100 * std::sqrt(sa / unit),
               100 * std::sqrt(sb / unit));
   std::map<uint32_t, std::pair<double, int>> by_face;
   for (size_t k = 0; k < ea.size(); ++k) {

@@ -192,7 +192,7 @@ EvalResult evaluate(const Reference& ref, const RowMatrixX3d& positions, const s
 }
 
 EvalResult evaluate_by_closest_point(const Reference& ref, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
-                                     const RowMatrixXd& transfer, int threads) {
+                                     const RowMatrixXd& transfer, int threads, std::vector<double>* point_errors) {
   const Compared K = compared_columns(transfer, ref.transfer);
   const double unit = K.unit;
   Mesh m;  // the asset's faces as a mesh whose render vertices are its positions
@@ -210,6 +210,7 @@ EvalResult evaluate_by_closest_point(const Reference& ref, const RowMatrixX3d& p
     err.push_back(interpolation_error(transfer, triangles[at[i].face], at[i].barycentric, ref.transfer,
                                       static_cast<Eigen::Index>(i), K) / unit);
   }
+  if (point_errors) *point_errors = err;
   summarize(err, r);
   return r;
 }

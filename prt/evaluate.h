@@ -62,7 +62,9 @@ EvalResult evaluate(const Reference& reference, const RowMatrixX3d& positions, c
 //! The same for an asset whose faces do not lie in the source's (a simplified one): each
 //! reference point is located at its closest point on the asset's surface (ties: the lower
 //! face), and the asset's transfer interpolated there. The same for any thread count.
+//! \param point_errors if given, each reference point's error (a fraction of ‖t_unshadowed‖), in
+//!        the reference's order: where two assets differ (bench/eval_diff.cpp)
 EvalResult evaluate_by_closest_point(const Reference& reference, const RowMatrixX3d& positions, const std::vector<Triangle>& triangles,
-                                     const RowMatrixXd& transfer, int threads = 0);
+                                     const RowMatrixXd& transfer, int threads = 0, std::vector<double>* point_errors = nullptr);
 
 }  // namespace prtsub
