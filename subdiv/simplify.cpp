@@ -21,8 +21,9 @@
 //              the memoryless quadric (Lindstrom and Turk), evaluated where v0 goes.
 // Where the values are noisy estimates (traced transfer), d² above is on average the signal's
 // change plus what the corners' noise alone gives, v0 + w1²·v1 + wa²·va + wb²·vb for the
-// extension's weights w of t's corners: that is subtracted (the sum over faces clamped at zero), so that flat
-// patches of noise are not kept for their noise (mori_knob at 10%: 4.335% to 4.192%).
+// extension's weights w of t's corners: that is subtracted (the sum over faces clamped at
+// zero), so that flat patches of noise are not kept for their noise (mori_knob at 10%: 4.335%
+// to 4.192%).
 // Both are memoryless, as the paper combines them. The signal is SH in one global frame, so the
 // distance of the paper's equation 5 is the coefficient distance. Priority:
 //   E_signal / value_scale² + geometry_weight · E_geom / diagonal²   (Geometry: E_geom alone).
