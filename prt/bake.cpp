@@ -711,6 +711,20 @@ void gather_rows_in_place(const std::vector<uint32_t>& order, SurfaceSamples& s)
 // (chinese_dragon at 10%: 1%).
 constexpr double kBothWaysSampleFactor = 2;
 
+// Rays per sample of a simplified mesh's fit. Its samples are as many as the asset's faces ask
+// for, but they stand for the source's surface, whose vertices were all traced to rank the
+// collapses: at 10% of bunny, 111k samples at 16 rays are a fifth of the rays its 35k vertices
+// took, and their noise, not the mesh, was most of the asset's error (4.224% at 16 rays, 3.609%
+// at 64; BENCHMARKS.md, "The fit's samples of a simplified mesh"). So, unless the user set the
+// count, the samples get at least the rays traced before them, spread evenly (at most a vertex's
+// own count each): the fit costs no more rays than the transfer did, and a light simplification
+// (or both ways, whose samples are as dense as the input) keeps --sample-rays.
+int fit_to_source_sample_rays(const BakeOptions& o, uint64_t rays_before, size_t samples) {
+  if (!o.sample_rays_auto || samples == 0) return o.sample_rays;
+  const double even = std::ceil(double(rays_before) / double(samples));
+  return static_cast<int>(std::clamp(even, double(o.sample_rays), double(std::max(o.sample_rays, o.transfer.rays))));
+}
+
 // The fit of a simplified mesh: samples on the *source* surface (traced there, so they see the
 // shading the asset must reproduce, never a point inside the original geometry), each located
 // on the simplified surface by its closest point and weighted by that face's area over its
@@ -761,7 +775,7 @@ void fit_to_source(const Mesh& source, const RayScene& scene, const BakeOptions&
     }
   }
   TransferOptions to = o.transfer;
-  to.rays = o.sample_rays;
+  to.rays = fit_to_source_sample_rays(o, r.rays, s.size());
   to.seed = mix64(o.transfer.seed ^ 0x5A3D1E5ull);
   to.stream_offset = 0;
   if (progress.stage) progress.stage("samples", s.size());
