@@ -3,7 +3,9 @@
 // closest facing point of each asset (evaluate_by_closest_point, asked for each point's error).
 // Prints both RMS, as eval does, and the source faces that gain most squared error from A to B,
 // each with its share of the total gain, its point count, its centre and its normal: a loss
-// spread over the surface, or one feature broken.
+// spread over the surface, or one feature broken. Then, for each asset, the squared error by the
+// point's distance to the asset's surface (in shares of the source's bounding-box diagonal):
+// error far from the asset is the shape's, error close to it the values' interpolation.
 // usage: bash bench/cpp.sh BUILD eval_diff SOURCE A B [RAYS] [FACES]
 #include <algorithm>
 #include <cmath>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "prtsub/prt/asset.h"
+#include "prtsub/prt/closest_point.h"
 #include "prtsub/prt/evaluate.h"
 #include "prtsub/subdiv/mesh_io.h"
 
@@ -26,6 +29,26 @@ std::vector<double> squared_errors(const Reference& ref, const Asset& a) {
   evaluate_by_closest_point(ref, a.positions, a.triangles, a.transfer, 0, &e);
   for (double& x : e) x *= x;
   return e;
+}
+
+void by_distance(const char* name, const Reference& ref, const Asset& a, const std::vector<double>& e, double diag) {
+  Mesh m;  // as evaluate_by_closest_point locates: the asset's faces over its own positions
+  m.positions = a.positions;
+  m.vertex_position.resize(size_t(a.positions.rows()));
+  for (size_t i = 0; i < m.vertex_position.size(); ++i) m.vertex_position[i] = uint32_t(i);
+  m.triangles = a.triangles;
+  const std::vector<SurfaceLocation> at = closest_points(m, ref.points, 0, &ref.normals);
+  const double edges[] = {0.0025, 0.005, 0.01, 0.02, 0.04, INFINITY};
+  double sum[6] = {}, total = 0;
+  int n[6] = {};
+  for (size_t i = 0; i < e.size(); ++i) {
+    int b = 0;
+    while (at[i].distance > edges[b] * diag) ++b;
+    sum[b] += e[i], ++n[b], total += e[i];
+  }
+  std::printf("\n%s by distance to its surface:\n| distance, share of the diagonal | points | share of squared error | RMS %% |\n|---|---:|---:|---:|\n", name);
+  for (int b = 0; b < 6; ++b)
+    if (n[b] > 0) std::printf("| %s%g | %d | %.3f | %.2f |\n", b < 5 ? "≤ " : "> ", b < 5 ? edges[b] : edges[4], n[b], sum[b] / total, 100 * std::sqrt(sum[b] / n[b]));
 }
 
 }  // namespace
@@ -65,4 +88,7 @@ int main(int argc, char** argv) {
     std::printf("| %u | %d | %.3f | %.3f | %.1f %.1f %.1f | %.2f %.2f %.2f |\n", order[size_t(i)].second, by_face[order[size_t(i)].second].second,
                 order[size_t(i)].first / total, so_far / total, centre.x(), centre.y(), centre.z(), n.x(), n.y(), n.z());
   }
+  const double diag = (source.positions.colwise().maxCoeff() - source.positions.colwise().minCoeff()).norm();
+  by_distance("A", ref, A, ea, diag);
+  by_distance("B", ref, B, eb, diag);
 }

@@ -129,8 +129,8 @@ struct BakeOptions {
   //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split among
   //! sample_ray_choices as the pilot's measurements say (choose_sample_rays: 4 where shadows cross
   //! large faces, 32 on smooth scans, else this count). A simplified mesh's fit with
-  //! sample_rays_auto gives its samples (on the source) at least the rays traced before them,
-  //! spread evenly: from this count up to transfer.rays each (docs/simplification.md)
+  //! sample_rays_auto gives its samples (on the source) half of transfer.rays each, at least this
+  //! count (docs/simplification.md)
   int sample_rays = 16;
   bool sample_rays_auto = true;
   std::array<int, 3> sample_ray_choices = {4, 16, 32};
