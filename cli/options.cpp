@@ -126,8 +126,8 @@ void BakeCli::add_fit(ArgParser& args) {
   args.option("--sample-density", "D", "fit: samples per unit area instead (world units)", &s.density, 0.0, 1e30);
   args.option("--min-samples", "M", "fit: samples every triangle gets at least", &s.min_per_triangle, size_t(0), size_t(1) << 20);
   args.option("--sample-rays", "R", "fit: rays per surface sample [default: the pilot chooses 4, 16 or 32 for the same sample\n"
-              "rays (16 each without it); simplified (adaptive below the input's count),\n"
-              "half of --rays]", &bake.sample_rays, 1, 1 << 20);
+              "rays (16 each without it); below the input's count (adaptive or auto), half of\n"
+              "--rays]", &bake.sample_rays, 1, 1 << 20);
   args.choice("--sample-allocation", "fit: which faces get samples: only those where a pilot pass finds that interpolating\n"
               "the vertex values fails, or every face by area (the paper's)", &bake.allocation,
               {SampleAllocation::Pilot, SampleAllocation::Area}, sample_allocation_name);

@@ -425,7 +425,8 @@ TEST(Bake, ABudgetBelowTheInputSimplifiesAndTheFitToTheSourceBeatsItsPointValues
 TEST(Bake, ASimplifiedMeshsSamplesGetHalfAVertexsRaysAndErrLess) {
   // The sphere on its plane brought to half: the fit's samples, which stand for the whole
   // input and are not weighed against the vertices by noise, get half a vertex's rays each
-  // unless the count is given, and their lower noise shows in eval's error. Both ways keeps it.
+  // unless the count is given, and their lower noise shows in eval's error. Both ways does the
+  // same below the input's count, and keeps the count at it.
   const Mesh mesh = test::build(test::merge(test::icosphere(3), test::transformed(test::grid(16), 5.0, Eigen::Vector3d(-2.5, -2.5, -1))));
   BakeOptions o;
   o.refine = Refinement::Adaptive, o.adaptive.budget = 900;
@@ -443,10 +444,14 @@ TEST(Bake, ASimplifiedMeshsSamplesGetHalfAVertexsRaysAndErrLess) {
   auto error = [&](const BakeResult& r) { return evaluate_by_closest_point(ref, vertex_positions(r.mesh), r.mesh.triangles, r.transfer).rms_percent; };
   const double e_half = error(half), e_fixed = error(fixed);
   EXPECT_LT(e_half, 0.7 * e_fixed) << e_half << "% against " << e_fixed << "%";
-  o.sample_rays_auto = true, o.refine = Refinement::Auto, o.adaptive.budget = mesh.num_faces();
-  const BakeResult both = bake(mesh, o);
-  ASSERT_GT(both.refine.splits, 0u);
-  EXPECT_EQ(both.fit_data.sample_rays, o.sample_rays);
+  o.sample_rays_auto = true, o.refine = Refinement::Auto;
+  const BakeResult below = bake(mesh, o);
+  ASSERT_GT(below.refine.splits, 0u);
+  EXPECT_EQ(below.fit_data.sample_rays, 64);
+  o.adaptive.budget = mesh.num_faces();
+  const BakeResult at = bake(mesh, o);
+  ASSERT_GT(at.refine.splits, 0u);
+  EXPECT_EQ(at.fit_data.sample_rays, o.sample_rays);
 }
 
 TEST(Bake, ASimplifiedAssetsHoldOutIsTracedAgainWhereItsNoiseBuriesTheError) {
