@@ -128,9 +128,9 @@ struct BakeOptions {
   //! rays per surface sample; with the pilot and sample_rays_auto, the budget of sample rays this
   //! count sets (samples.per_triangle · sample_rays per sampled face) is instead split among
   //! sample_ray_choices as the pilot's measurements say (choose_sample_rays: 4 where shadows cross
-  //! large faces, 32 on smooth scans, else this count). A simplified mesh's fit with
-  //! sample_rays_auto gives its samples (on the source) half of transfer.rays each, at least this
-  //! count (docs/simplification.md)
+  //! large faces, 32 on smooth scans, else this count). Below the input's count
+  //! (simplified, or both ways there), sample_rays_auto gives the fit's samples on the source half
+  //! of transfer.rays each, at least this count (docs/simplification.md)
   int sample_rays = 16;
   bool sample_rays_auto = true;
   std::array<int, 3> sample_ray_choices = {4, 16, 32};
