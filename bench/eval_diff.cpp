@@ -32,12 +32,7 @@ std::vector<double> squared_errors(const Reference& ref, const Asset& a) {
 }
 
 void by_distance(const char* name, const Reference& ref, const Asset& a, const std::vector<double>& e, double diag) {
-  Mesh m;  // as evaluate_by_closest_point locates: the asset's faces over its own positions
-  m.positions = a.positions;
-  m.vertex_position.resize(size_t(a.positions.rows()));
-  for (size_t i = 0; i < m.vertex_position.size(); ++i) m.vertex_position[i] = uint32_t(i);
-  m.triangles = a.triangles;
-  const std::vector<SurfaceLocation> at = closest_points(m, ref.points, 0, &ref.normals);
+  const std::vector<SurfaceLocation> at = closest_points(asset_mesh(a), ref.points, 0, &ref.normals);  // as eval locates
   const double edges[] = {0.0025, 0.005, 0.01, 0.02, 0.04, INFINITY};
   double sum[6] = {}, total = 0;
   int n[6] = {};

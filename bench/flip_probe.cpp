@@ -9,6 +9,7 @@
 // usage: bash bench/cpp.sh BUILD flip_probe SOURCE ASSET [PASSES [TOL [TRAIN_POINTS [TRAIN_RAYS]]]]
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -26,19 +27,12 @@ using V3 = Eigen::Vector3d;
 
 namespace {
 
-Mesh as_mesh(const RowMatrixX3d& P, const std::vector<Triangle>& T) {
-  Mesh m;
-  m.positions = P;
-  m.vertex_position.resize(size_t(P.rows()));
-  for (size_t i = 0; i < m.vertex_position.size(); ++i) m.vertex_position[i] = uint32_t(i);
-  m.triangles = T;
-  return m;
-}
-
-RowMatrixXd refit(const RowMatrixX3d& P, const std::vector<Triangle>& T, const Reference& train, double lambda,
-                  std::vector<SurfaceLocation>& at) {
-  at = closest_points(as_mesh(P, T), train.points, 0, &train.normals);
-  const Eigen::Index V = P.rows(), K = train.transfer.cols();
+// The asset's vertices fitted to the training points on its faces `T` (its positions are
+// `mesh`'s: flips change only the faces), each point's location left in `at`.
+RowMatrixXd refit(Mesh mesh, const std::vector<Triangle>& T, const Reference& train, double lambda, std::vector<SurfaceLocation>& at) {
+  mesh.triangles = T;
+  at = closest_points(mesh, train.points, 0, &train.normals);
+  const Eigen::Index V = mesh.positions.rows(), K = train.transfer.cols();
   std::vector<Eigen::Triplet<double>> tr;
   RowMatrixXd rhs = RowMatrixXd::Zero(V, K);
   for (size_t i = 0; i < at.size(); ++i) {
@@ -121,11 +115,12 @@ int main(int argc, char** argv) {
   const double diag = (source.positions.colwise().maxCoeff() - source.positions.colwise().minCoeff()).norm();
   const double tol = tol_share * diag, lambda = 1e-3;
 
-  RowMatrixX3d P = asset.positions;
+  const Mesh base = asset_mesh(asset);
+  const RowMatrixX3d& P = asset.positions;
   std::vector<Triangle> T = asset.triangles;
   std::printf("asset as baked: RMS %.3f%%\n", evaluate_by_closest_point(judge, P, T, asset.transfer).rms_percent);
   std::vector<SurfaceLocation> at;
-  RowMatrixXd values = refit(P, T, train, lambda, at);
+  RowMatrixXd values = refit(base, T, train, lambda, at);
   std::printf("refitted, no flips: RMS %.3f%%\n", evaluate_by_closest_point(judge, P, T, values).rms_percent);
   // Positions welded, so that a flip never adds an edge that exists between other render vertices.
   std::map<std::array<double, 3>, uint32_t> weld;
@@ -183,7 +178,7 @@ int main(int argc, char** argv) {
       T[fl.f] = fl.n1, T[fl.g] = fl.n2;
       ++done;
     }
-    values = refit(P, T, train, lambda, at);
+    values = refit(base, T, train, lambda, at);
     std::printf("pass %d: %zu candidates, %zu flipped; RMS %.3f%%\n", pass + 1, flips.size(), done,
                 evaluate_by_closest_point(judge, P, T, values).rms_percent);
     std::fflush(stdout);
